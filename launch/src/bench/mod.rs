@@ -1,0 +1,3 @@
+//! `nauta bench ...`: benchmarks that print figures (JSON with `--json`).
+
+pub mod ipc;

@@ -1,0 +1,61 @@
+//! `nauta`: the command-line front end (DESIGN §9).
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod bench;
+
+/// nauta: navigation stack of an autonomous underwater vehicle.
+#[derive(Debug, Parser)]
+#[command(name = "nauta", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Benchmarks (use a release build).
+    Bench {
+        #[command(subcommand)]
+        which: BenchCommand,
+    },
+    /// Internal: the peer process of `nauta bench ipc`.
+    #[command(hide = true, name = "__ipc-peer")]
+    IpcPeer {
+        /// Arguments passed by the benchmark driver.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum BenchCommand {
+    /// Inter-process latency and throughput: iceoryx2 against a Unix socket and a pipe.
+    Ipc {
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("nauta: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Bench { which } => match which {
+            BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
+        },
+        Command::IpcPeer { args } => bench::ipc::peer(&args).map(|()| ExitCode::SUCCESS),
+    }
+}

@@ -1,0 +1,501 @@
+//! Checked conversion from wire messages into domain values (STYLE "wire vs
+//! domain"). A consumer turns every received message into one of these before an
+//! estimator sees it; whatever fails is counted as rejected and the estimator's
+//! state is left alone (DESIGN §4, "bad values are part of the contract").
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use crate::{
+    AhrsSample, AttitudeEstimate, BuoyRange, DepthSample, DvlSample, GpsFix, ImuSample, LblReply,
+    PropellerSample, TruthState,
+};
+
+/// Why a message was rejected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ValidationError {
+    /// A field holds NaN or an infinity.
+    #[error("{type_name}.{field} is not finite ({value})")]
+    NonFinite {
+        /// Message type.
+        type_name: &'static str,
+        /// Field name.
+        field: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// A field lies outside its physical range.
+    #[error("{type_name}.{field} = {value} is outside [{min}, {max}]")]
+    OutOfRange {
+        /// Message type.
+        type_name: &'static str,
+        /// Field name.
+        field: &'static str,
+        /// The value.
+        value: f64,
+        /// Smallest accepted value.
+        min: f64,
+        /// Largest accepted value.
+        max: f64,
+    },
+    /// A quaternion is far from unit norm.
+    #[error("{type_name}.{field} has norm {norm}, not 1")]
+    NotUnitQuaternion {
+        /// Message type.
+        type_name: &'static str,
+        /// Field name.
+        field: &'static str,
+        /// Its norm.
+        norm: f64,
+    },
+    /// The stamp is earlier than the previous one on the same input.
+    #[error("stamp {stamp_ns} ns goes backwards (previous {previous_ns} ns)")]
+    StampBackwards {
+        /// This message's stamp.
+        stamp_ns: u64,
+        /// The previous accepted stamp.
+        previous_ns: u64,
+    },
+}
+
+impl ValidationError {
+    /// A short, stable name of the kind of error, for counting and log-once.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ValidationError::NonFinite { .. } => "non-finite",
+            ValidationError::OutOfRange { .. } => "out-of-range",
+            ValidationError::NotUnitQuaternion { .. } => "non-unit-quaternion",
+            ValidationError::StampBackwards { .. } => "stamp-backwards",
+        }
+    }
+}
+
+/// Largest deviation of a quaternion's norm from 1 that is accepted (and then
+/// renormalised); anything further is a corrupt message, not rounding.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
+
+/// Checks one scalar: finite and within `[min, max]` (written so that NaN fails).
+pub fn scalar(
+    type_name: &'static str,
+    field: &'static str,
+    value: f64,
+    min: f64,
+    max: f64,
+) -> Result<f64, ValidationError> {
+    if !value.is_finite() {
+        return Err(ValidationError::NonFinite {
+            type_name,
+            field,
+            value,
+        });
+    }
+    if !(value >= min && value <= max) {
+        return Err(ValidationError::OutOfRange {
+            type_name,
+            field,
+            value,
+            min,
+            max,
+        });
+    }
+    Ok(value)
+}
+
+/// Checks a 3-vector component by component (each within `±limit`).
+pub fn vector(
+    type_name: &'static str,
+    field: &'static str,
+    v: [f64; 3],
+    limit: f64,
+) -> Result<Vector3<f64>, ValidationError> {
+    for x in v {
+        scalar(type_name, field, x, -limit, limit)?;
+    }
+    Ok(Vector3::from(v))
+}
+
+/// Checks a `[w, x, y, z]` quaternion: finite and of unit norm within
+/// [`QUATERNION_NORM_TOLERANCE`]; returns it renormalised.
+pub fn quaternion(
+    type_name: &'static str,
+    field: &'static str,
+    q: [f64; 4],
+) -> Result<UnitQuaternion<f64>, ValidationError> {
+    for x in q {
+        scalar(type_name, field, x, -1.0 - QUATERNION_NORM_TOLERANCE, 1.0 + QUATERNION_NORM_TOLERANCE)
+            .map_err(|e| match e {
+                ValidationError::OutOfRange { .. } => ValidationError::NotUnitQuaternion {
+                    type_name,
+                    field,
+                    norm: q.iter().map(|c| c * c).sum::<f64>().sqrt(),
+                },
+                other => other,
+            })?;
+    }
+    let quat = Quaternion::new(q[0], q[1], q[2], q[3]);
+    let norm = quat.norm();
+    if !((norm - 1.0).abs() <= QUATERNION_NORM_TOLERANCE) {
+        return Err(ValidationError::NotUnitQuaternion {
+            type_name,
+            field,
+            norm,
+        });
+    }
+    Ok(UnitQuaternion::new_normalize(quat))
+}
+
+/// Enforces non-decreasing stamps on one input stream.
+#[derive(Debug, Clone, Default)]
+pub struct StampOrder {
+    last_ns: Option<u64>,
+}
+
+impl StampOrder {
+    /// Accepts `stamp_ns` when it is not earlier than the last accepted one.
+    pub fn check(&mut self, stamp_ns: u64) -> Result<(), ValidationError> {
+        if let Some(previous_ns) = self.last_ns
+            && stamp_ns < previous_ns
+        {
+            return Err(ValidationError::StampBackwards {
+                stamp_ns,
+                previous_ns,
+            });
+        }
+        self.last_ns = Some(stamp_ns);
+        Ok(())
+    }
+
+    /// The last accepted stamp.
+    pub fn last(&self) -> Option<u64> {
+        self.last_ns
+    }
+}
+
+/// Physical limits used by the checks (generous: they catch corruption, not outliers).
+pub mod limits {
+    /// Angular rate, rad/s per axis (±2000 °/s ≈ 35 rad/s gyros exist; 50 leaves margin).
+    pub const GYRO_RAD_S: f64 = 50.0;
+    /// Specific force, m/s² per axis (±20 g).
+    pub const ACCEL_M_S2: f64 = 200.0;
+    /// Magnetic flux density, µT per axis (Earth ≤ 65 µT; allows hard iron).
+    pub const MAG_UT: f64 = 1000.0;
+    /// Smallest accepted depth, m: a little above the surface (waves, offsets).
+    pub const DEPTH_MIN_M: f64 = -5.0;
+    /// Largest accepted depth, m (the deepest ocean).
+    pub const DEPTH_MAX_M: f64 = 11_000.0;
+    /// Vehicle speed over ground, m/s per axis.
+    pub const SPEED_M_S: f64 = 20.0;
+    /// Largest one-way acoustic time of flight, s (30 km at 1500 m/s).
+    pub const TIME_OF_FLIGHT_MAX_S: f64 = 20.0;
+    /// Plausible sound speed in sea water, m/s.
+    pub const SOUND_SPEED_M_S: (f64, f64) = (1400.0, 1600.0);
+}
+
+const PI: f64 = core::f64::consts::PI;
+
+/// A checked IMU sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Imu {
+    /// End of the integration interval, ns.
+    pub stamp_ns: u64,
+    /// Interval length, s.
+    pub interval_s: f64,
+    /// Angular rate, FRD, rad/s.
+    pub gyro_rad_s: Vector3<f64>,
+    /// Specific force, FRD, m/s².
+    pub accel_m_s2: Vector3<f64>,
+    /// Magnetic flux density, FRD, µT.
+    pub mag_ut: Vector3<f64>,
+}
+
+impl TryFrom<&ImuSample> for Imu {
+    type Error = ValidationError;
+    fn try_from(m: &ImuSample) -> Result<Self, Self::Error> {
+        const T: &str = "ImuSample";
+        Ok(Imu {
+            stamp_ns: m.header.stamp_ns,
+            interval_s: scalar(T, "interval_s", m.interval_s, 1e-6, 1.0)?,
+            gyro_rad_s: vector(T, "gyro_rad_s", m.gyro_rad_s, limits::GYRO_RAD_S)?,
+            accel_m_s2: vector(T, "accel_m_s2", m.accel_m_s2, limits::ACCEL_M_S2)?,
+            mag_ut: vector(T, "mag_ut", m.mag_ut, limits::MAG_UT)?,
+        })
+    }
+}
+
+/// A checked depth sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Depth {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Depth, m, positive down.
+    pub depth_m: f64,
+}
+
+impl TryFrom<&DepthSample> for Depth {
+    type Error = ValidationError;
+    fn try_from(m: &DepthSample) -> Result<Self, Self::Error> {
+        Ok(Depth {
+            stamp_ns: m.header.stamp_ns,
+            depth_m: scalar(
+                "DepthSample",
+                "depth_m",
+                m.depth_m,
+                limits::DEPTH_MIN_M,
+                limits::DEPTH_MAX_M,
+            )?,
+        })
+    }
+}
+
+/// A checked DVL sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dvl {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Velocity over the bottom, FRD, m/s.
+    pub velocity_body_m_s: Vector3<f64>,
+    /// Altitude, m.
+    pub altitude_m: f64,
+    /// Bit i: beam i valid.
+    pub beams_valid: u8,
+    /// Bottom lock held.
+    pub bottom_lock: bool,
+}
+
+impl TryFrom<&DvlSample> for Dvl {
+    type Error = ValidationError;
+    fn try_from(m: &DvlSample) -> Result<Self, Self::Error> {
+        const T: &str = "DvlSample";
+        scalar(T, "beams_valid", f64::from(m.beams_valid), 0.0, 15.0)?;
+        scalar(T, "bottom_lock", f64::from(m.bottom_lock), 0.0, 1.0)?;
+        Ok(Dvl {
+            stamp_ns: m.header.stamp_ns,
+            velocity_body_m_s: vector(T, "velocity_body_m_s", m.velocity_body_m_s, limits::SPEED_M_S)?,
+            altitude_m: scalar(T, "altitude_m", m.altitude_m, 0.0, 1000.0)?,
+            beams_valid: m.beams_valid as u8,
+            bottom_lock: m.bottom_lock == 1,
+        })
+    }
+}
+
+/// A checked GPS fix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gps {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Latitude, rad.
+    pub lat_rad: f64,
+    /// Longitude, rad.
+    pub lon_rad: f64,
+    /// Ellipsoidal height, m.
+    pub height_m: f64,
+    /// Horizontal standard deviation, m.
+    pub horizontal_std_m: f64,
+    /// Fix quality code.
+    pub quality: u32,
+}
+
+impl TryFrom<&GpsFix> for Gps {
+    type Error = ValidationError;
+    fn try_from(m: &GpsFix) -> Result<Self, Self::Error> {
+        const T: &str = "GpsFix";
+        scalar(T, "quality", f64::from(m.quality), 0.0, 8.0)?;
+        Ok(Gps {
+            stamp_ns: m.header.stamp_ns,
+            lat_rad: scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?,
+            lon_rad: scalar(T, "lon_rad", m.lon_rad, -PI, PI)?,
+            height_m: scalar(T, "height_m", m.height_m, -1000.0, 10_000.0)?,
+            horizontal_std_m: scalar(T, "horizontal_std_m", m.horizontal_std_m, 0.0, 10_000.0)?,
+            quality: m.quality,
+        })
+    }
+}
+
+/// A checked vendor AHRS sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ahrs {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Roll, rad, (-π, π].
+    pub roll_rad: f64,
+    /// Pitch, rad, [-π/2, π/2].
+    pub pitch_rad: f64,
+    /// Magnetic heading, rad, normalised to [0, 2π).
+    pub heading_mag_rad: f64,
+}
+
+impl TryFrom<&AhrsSample> for Ahrs {
+    type Error = ValidationError;
+    fn try_from(m: &AhrsSample) -> Result<Self, Self::Error> {
+        const T: &str = "AhrsSample";
+        let heading = scalar(T, "heading_mag_rad", m.heading_mag_rad, -PI, 2.0 * PI)?;
+        Ok(Ahrs {
+            stamp_ns: m.header.stamp_ns,
+            roll_rad: scalar(T, "roll_rad", m.roll_rad, -PI, PI)?,
+            pitch_rad: scalar(T, "pitch_rad", m.pitch_rad, -PI / 2.0, PI / 2.0)?,
+            heading_mag_rad: heading.rem_euclid(2.0 * PI),
+        })
+    }
+}
+
+/// A checked propeller sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Propeller {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Shaft speed, rad/s.
+    pub shaft_speed_rad_s: f64,
+}
+
+impl TryFrom<&PropellerSample> for Propeller {
+    type Error = ValidationError;
+    fn try_from(m: &PropellerSample) -> Result<Self, Self::Error> {
+        Ok(Propeller {
+            stamp_ns: m.header.stamp_ns,
+            shaft_speed_rad_s: scalar(
+                "PropellerSample",
+                "shaft_speed_rad_s",
+                m.shaft_speed_rad_s,
+                -1000.0,
+                1000.0,
+            )?,
+        })
+    }
+}
+
+/// A checked buoy range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BuoyRangeReading {
+    /// Reception stamp, ns.
+    pub stamp_ns: u64,
+    /// Buoy latitude, rad.
+    pub buoy_lat_rad: f64,
+    /// Buoy longitude, rad.
+    pub buoy_lon_rad: f64,
+    /// Buoy transducer depth, m.
+    pub buoy_depth_m: f64,
+    /// One-way time of flight, s.
+    pub time_of_flight_s: f64,
+    /// Sound speed, m/s.
+    pub sound_speed_m_s: f64,
+}
+
+impl TryFrom<&BuoyRange> for BuoyRangeReading {
+    type Error = ValidationError;
+    fn try_from(m: &BuoyRange) -> Result<Self, Self::Error> {
+        const T: &str = "BuoyRange";
+        let (cmin, cmax) = limits::SOUND_SPEED_M_S;
+        Ok(BuoyRangeReading {
+            stamp_ns: m.header.stamp_ns,
+            buoy_lat_rad: scalar(T, "buoy_lat_rad", m.buoy_lat_rad, -PI / 2.0, PI / 2.0)?,
+            buoy_lon_rad: scalar(T, "buoy_lon_rad", m.buoy_lon_rad, -PI, PI)?,
+            buoy_depth_m: scalar(T, "buoy_depth_m", m.buoy_depth_m, limits::DEPTH_MIN_M, 1000.0)?,
+            time_of_flight_s: scalar(
+                T,
+                "time_of_flight_s",
+                m.time_of_flight_s,
+                0.0,
+                limits::TIME_OF_FLIGHT_MAX_S,
+            )?,
+            sound_speed_m_s: scalar(T, "sound_speed_m_s", m.sound_speed_m_s, cmin, cmax)?,
+        })
+    }
+}
+
+/// A checked LBL reply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LblReplyReading {
+    /// Reception stamp, ns.
+    pub stamp_ns: u64,
+    /// Transponder.
+    pub transponder_id: u32,
+    /// Interrogation stamp, ns.
+    pub interrogation_stamp_ns: u64,
+    /// Round-trip time, s.
+    pub round_trip_s: f64,
+}
+
+impl TryFrom<&LblReply> for LblReplyReading {
+    type Error = ValidationError;
+    fn try_from(m: &LblReply) -> Result<Self, Self::Error> {
+        const T: &str = "LblReply";
+        if m.reply_stamp_ns < m.interrogation_stamp_ns {
+            return Err(ValidationError::StampBackwards {
+                stamp_ns: m.reply_stamp_ns,
+                previous_ns: m.interrogation_stamp_ns,
+            });
+        }
+        Ok(LblReplyReading {
+            stamp_ns: m.header.stamp_ns,
+            transponder_id: m.transponder_id,
+            interrogation_stamp_ns: m.interrogation_stamp_ns,
+            round_trip_s: scalar(
+                T,
+                "round_trip_s",
+                m.round_trip_s,
+                0.0,
+                2.0 * limits::TIME_OF_FLIGHT_MAX_S,
+            )?,
+        })
+    }
+}
+
+/// A checked true state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Truth {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Latitude, rad.
+    pub lat_rad: f64,
+    /// Longitude, rad.
+    pub lon_rad: f64,
+    /// Depth, m.
+    pub depth_m: f64,
+    /// Velocity NED, m/s.
+    pub vel_ned_m_s: Vector3<f64>,
+    /// Attitude body → NED.
+    pub attitude: UnitQuaternion<f64>,
+}
+
+impl TryFrom<&TruthState> for Truth {
+    type Error = ValidationError;
+    fn try_from(m: &TruthState) -> Result<Self, Self::Error> {
+        const T: &str = "TruthState";
+        Ok(Truth {
+            stamp_ns: m.header.stamp_ns,
+            lat_rad: scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?,
+            lon_rad: scalar(T, "lon_rad", m.lon_rad, -PI, PI)?,
+            depth_m: scalar(T, "depth_m", m.depth_m, limits::DEPTH_MIN_M, limits::DEPTH_MAX_M)?,
+            vel_ned_m_s: vector(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?,
+            attitude: quaternion(T, "quat_nb", m.quat_nb)?,
+        })
+    }
+}
+
+/// A checked attitude estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Attitude {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Attitude body → NED.
+    pub attitude: UnitQuaternion<f64>,
+    /// Error standard deviation about N, E, D, rad.
+    pub std_rad: Vector3<f64>,
+    /// Gyro bias, FRD, rad/s.
+    pub gyro_bias_rad_s: Vector3<f64>,
+}
+
+impl TryFrom<&AttitudeEstimate> for Attitude {
+    type Error = ValidationError;
+    fn try_from(m: &AttitudeEstimate) -> Result<Self, Self::Error> {
+        const T: &str = "AttitudeEstimate";
+        for s in m.std_rad {
+            scalar(T, "std_rad", s, 0.0, 2.0 * PI)?;
+        }
+        Ok(Attitude {
+            stamp_ns: m.header.stamp_ns,
+            attitude: quaternion(T, "quat_nb", m.quat_nb)?,
+            std_rad: Vector3::from(m.std_rad),
+            gyro_bias_rad_s: vector(T, "gyro_bias_rad_s", m.gyro_bias_rad_s, limits::GYRO_RAD_S)?,
+        })
+    }
+}
