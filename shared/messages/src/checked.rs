@@ -121,15 +121,21 @@ pub fn quaternion(
     q: [f64; 4],
 ) -> Result<UnitQuaternion<f64>, ValidationError> {
     for x in q {
-        scalar(type_name, field, x, -1.0 - QUATERNION_NORM_TOLERANCE, 1.0 + QUATERNION_NORM_TOLERANCE)
-            .map_err(|e| match e {
-                ValidationError::OutOfRange { .. } => ValidationError::NotUnitQuaternion {
-                    type_name,
-                    field,
-                    norm: q.iter().map(|c| c * c).sum::<f64>().sqrt(),
-                },
-                other => other,
-            })?;
+        scalar(
+            type_name,
+            field,
+            x,
+            -1.0 - QUATERNION_NORM_TOLERANCE,
+            1.0 + QUATERNION_NORM_TOLERANCE,
+        )
+        .map_err(|e| match e {
+            ValidationError::OutOfRange { .. } => ValidationError::NotUnitQuaternion {
+                type_name,
+                field,
+                norm: q.iter().map(|c| c * c).sum::<f64>().sqrt(),
+            },
+            other => other,
+        })?;
     }
     let quat = Quaternion::new(q[0], q[1], q[2], q[3]);
     let norm = quat.norm();
@@ -269,7 +275,12 @@ impl TryFrom<&DvlSample> for Dvl {
         scalar(T, "bottom_lock", f64::from(m.bottom_lock), 0.0, 1.0)?;
         Ok(Dvl {
             stamp_ns: m.header.stamp_ns,
-            velocity_body_m_s: vector(T, "velocity_body_m_s", m.velocity_body_m_s, limits::SPEED_M_S)?,
+            velocity_body_m_s: vector(
+                T,
+                "velocity_body_m_s",
+                m.velocity_body_m_s,
+                limits::SPEED_M_S,
+            )?,
             altitude_m: scalar(T, "altitude_m", m.altitude_m, 0.0, 1000.0)?,
             beams_valid: m.beams_valid as u8,
             bottom_lock: m.bottom_lock == 1,
@@ -388,7 +399,13 @@ impl TryFrom<&BuoyRange> for BuoyRangeReading {
             stamp_ns: m.header.stamp_ns,
             buoy_lat_rad: scalar(T, "buoy_lat_rad", m.buoy_lat_rad, -PI / 2.0, PI / 2.0)?,
             buoy_lon_rad: scalar(T, "buoy_lon_rad", m.buoy_lon_rad, -PI, PI)?,
-            buoy_depth_m: scalar(T, "buoy_depth_m", m.buoy_depth_m, limits::DEPTH_MIN_M, 1000.0)?,
+            buoy_depth_m: scalar(
+                T,
+                "buoy_depth_m",
+                m.buoy_depth_m,
+                limits::DEPTH_MIN_M,
+                1000.0,
+            )?,
             time_of_flight_s: scalar(
                 T,
                 "time_of_flight_s",
@@ -464,7 +481,13 @@ impl TryFrom<&TruthState> for Truth {
             stamp_ns: m.header.stamp_ns,
             lat_rad: scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?,
             lon_rad: scalar(T, "lon_rad", m.lon_rad, -PI, PI)?,
-            depth_m: scalar(T, "depth_m", m.depth_m, limits::DEPTH_MIN_M, limits::DEPTH_MAX_M)?,
+            depth_m: scalar(
+                T,
+                "depth_m",
+                m.depth_m,
+                limits::DEPTH_MIN_M,
+                limits::DEPTH_MAX_M,
+            )?,
             vel_ned_m_s: vector(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?,
             attitude: quaternion(T, "quat_nb", m.quat_nb)?,
         })

@@ -53,13 +53,12 @@ pub fn encode<M: Message>(msg: &M) -> Result<Vec<u8>, EncodeError> {
 
 /// Decodes a message; the bytes must hold exactly one.
 pub fn decode<M: Message>(bytes: &[u8]) -> Result<M, DecodeError> {
-    let (msg, used) =
-        bincode::serde::decode_from_slice(bytes, config()).map_err(|source| {
-            DecodeError::Invalid {
-                type_name: M::TYPE_NAME,
-                source,
-            }
-        })?;
+    let (msg, used) = bincode::serde::decode_from_slice(bytes, config()).map_err(|source| {
+        DecodeError::Invalid {
+            type_name: M::TYPE_NAME,
+            source,
+        }
+    })?;
     if used != bytes.len() {
         return Err(DecodeError::TrailingBytes {
             type_name: M::TYPE_NAME,

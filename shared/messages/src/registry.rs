@@ -142,10 +142,17 @@ mod tests {
         for t in &types {
             assert!(t.type_name.starts_with("nauta."), "{}", t.type_name);
             assert!(t.type_name.contains(".v"), "{}", t.type_name);
-            assert_eq!(t.fields[0].name, "header", "{} must start with the header", t.type_name);
+            assert_eq!(
+                t.fields[0].name, "header",
+                "{} must start with the header",
+                t.type_name
+            );
         }
         // The iceoryx2 type name is the pinned one, not the Rust path.
-        assert_eq!(unsafe { <ImuSample as ZeroCopySend>::type_name() }, "nauta.ImuSample.v1");
+        assert_eq!(
+            unsafe { <ImuSample as ZeroCopySend>::type_name() },
+            "nauta.ImuSample.v1"
+        );
     }
 
     #[test]

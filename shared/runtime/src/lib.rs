@@ -1,1 +1,35 @@
+//! The runtime every nauta process is built on (DESIGN §5-7): node creation in a
+//! per-run namespace, one definition per service (its QoS), typed publishers and
+//! subscribers with sequence-gap counting and back-pressure deadlines, the event
+//! loop that ends cleanly on SIGINT/SIGTERM, the run clock, the ordered
+//! multi-input merge, health reporting and dead-node cleanup.
+//!
+//! Estimation code never depends on this crate; a service binary is a thin shell
+//! that wires [`Context`] ports to a pure estimator.
 
+pub mod clock;
+pub mod context;
+pub mod describe;
+pub mod event_loop;
+pub mod health;
+pub mod manifest;
+pub mod merge;
+pub mod namespace;
+pub mod ports;
+pub mod process;
+pub mod services;
+
+pub use clock::{ClockMode, Pacer};
+pub use context::Context;
+pub use describe::{Describe, PortDescription};
+pub use event_loop::{EventLoop, LoopExit, Wake};
+pub use health::HealthReporter;
+pub use manifest::Manifest;
+pub use merge::OrderedMerge;
+pub use namespace::Namespace;
+pub use ports::{Inbox, Publisher, Subscriber};
+pub use process::ProcessArgs;
+pub use services::ServiceSpec;
+
+/// iceoryx2's inter-process service type, used everywhere.
+pub type Ipc = iceoryx2::service::ipc::Service;

@@ -1,0 +1,49 @@
+//! `--describe`: a binary's inputs and outputs, so the launcher can check the
+//! wiring of a manifest without the manifest repeating it (DESIGN §5).
+
+use serde::{Deserialize, Serialize};
+
+use nauta_messages::Message;
+
+use crate::services::ServiceSpec;
+
+/// One port: service name (without namespace) and type name.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PortDescription {
+    /// Service name, e.g. `sensor/imu`.
+    pub service: String,
+    /// Pinned type name, e.g. `nauta.ImuSample.v1`.
+    #[serde(rename = "type")]
+    pub type_name: String,
+}
+
+impl PortDescription {
+    /// The description of a service.
+    pub fn of<M: Message>(spec: &ServiceSpec<M>) -> Self {
+        PortDescription {
+            service: spec.name.clone(),
+            type_name: M::TYPE_NAME.to_owned(),
+        }
+    }
+}
+
+/// What `--describe` prints.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Describe {
+    /// The role (`attitude`).
+    pub role: String,
+    /// Services it subscribes to.
+    pub inputs: Vec<PortDescription>,
+    /// Services it publishes.
+    pub outputs: Vec<PortDescription>,
+    /// Variants it implements; the first is the default.
+    pub variants: Vec<String>,
+}
+
+impl Describe {
+    /// Prints the description as one line of JSON on stdout.
+    pub fn print(&self) -> anyhow::Result<()> {
+        println!("{}", serde_json::to_string(self)?);
+        Ok(())
+    }
+}

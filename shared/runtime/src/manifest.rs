@@ -1,0 +1,466 @@
+//! Manifests (DESIGN §5): the TOML file that describes a run and its processes.
+//! Unknown keys are refused; errors name the file, the line and the key.
+//! The launcher applies `--set` overrides and passes the effective manifest to
+//! every process, which reads its own parameters from it.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context as _, bail};
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+
+use crate::clock::ClockMode;
+
+/// `[run]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSection {
+    /// `"auto"` (unique per run) or a fixed namespace.
+    #[serde(default = "auto")]
+    pub namespace: String,
+    /// `"sim"` or `"wall"`.
+    #[serde(default = "sim")]
+    pub clock: String,
+    /// Mission duration, s of simulated time.
+    pub duration_s: f64,
+    /// Seed of every random generator of the run.
+    #[serde(default)]
+    pub seed: u64,
+    /// Multiple of real time in `wall` mode.
+    #[serde(default = "one")]
+    pub rate: f64,
+    /// How long a `sim`-mode publisher waits on a full subscriber before giving up, ms.
+    #[serde(default = "deadline_ms")]
+    pub backpressure_deadline_ms: u64,
+}
+
+fn auto() -> String {
+    "auto".into()
+}
+fn sim() -> String {
+    "sim".into()
+}
+fn one() -> f64 {
+    1.0
+}
+fn deadline_ms() -> u64 {
+    2000
+}
+
+/// `[site]`: where the mission takes place.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Site {
+    /// Latitude of the operating area, degrees.
+    pub latitude_deg: f64,
+    /// Longitude of the operating area, degrees.
+    pub longitude_deg: f64,
+    /// Magnetic declination, degrees, east positive (true = magnetic + declination).
+    #[serde(default)]
+    pub magnetic_declination_deg: f64,
+}
+
+/// `[process.NAME.restart]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RestartSection {
+    /// `never`, `on-failure` or `always`.
+    pub policy: String,
+    /// Most restarts within `window_s`.
+    #[serde(default)]
+    pub max: Option<u32>,
+    /// Window for `max`, s.
+    #[serde(default)]
+    pub window_s: Option<f64>,
+    /// Backoff from the first to the longest delay, ms.
+    #[serde(default)]
+    pub backoff_ms: Option<[u64; 2]>,
+}
+
+/// `[process.NAME]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProcessSection {
+    /// Binary name (`nauta-sensor`), found next to `nauta`, then on PATH.
+    pub bin: String,
+    /// Extra command-line arguments.
+    #[serde(default)]
+    pub args: Vec<String>,
+    /// The variant to run (for estimators with several implementations).
+    #[serde(default)]
+    pub variant: Option<String>,
+    /// Parameters per variant.
+    #[serde(default)]
+    pub variants: BTreeMap<String, toml::Table>,
+    /// Parameters common to every variant.
+    #[serde(default)]
+    pub params: toml::Table,
+    /// Restart policy.
+    #[serde(default)]
+    pub restart: Option<RestartSection>,
+    /// Processes that must be ready before this one starts.
+    #[serde(default)]
+    pub after: Vec<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawManifest {
+    run: RunSection,
+    #[serde(default)]
+    site: Option<Site>,
+    #[serde(default)]
+    process: BTreeMap<String, ProcessSection>,
+}
+
+/// A parsed and checked manifest.
+#[derive(Debug, Clone)]
+pub struct Manifest {
+    /// Where it was read from.
+    pub path: PathBuf,
+    /// `[run]`.
+    pub run: RunSection,
+    /// `[site]`, if given.
+    pub site: Option<Site>,
+    /// `[process.*]`, by name.
+    pub processes: BTreeMap<String, ProcessSection>,
+    table: toml::Table,
+    text: String,
+}
+
+impl Manifest {
+    /// Reads and checks `path`.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        Self::load_with(path, &[])
+    }
+
+    /// Reads `path`, applies `--set KEY=VALUE` overrides, and checks the result.
+    pub fn load_with(path: &Path, overrides: &[String]) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read manifest {}", path.display()))?;
+        let mut table: toml::Table = toml::from_str(&text)
+            .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+        for o in overrides {
+            apply_override(&mut table, o)
+                .with_context(|| format!("{}: in --set {o}", path.display()))?;
+        }
+        Self::from_table(path, table, text)
+    }
+
+    /// Parses manifest text (for tests and generated manifests).
+    pub fn parse(path: &Path, text: &str) -> anyhow::Result<Self> {
+        let table: toml::Table = toml::from_str(text)
+            .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+        Self::from_table(path, table, text.to_owned())
+    }
+
+    fn from_table(path: &Path, table: toml::Table, text: String) -> anyhow::Result<Self> {
+        // Deserialize from the text when unchanged so errors carry line numbers.
+        let raw: RawManifest = match toml::from_str::<toml::Table>(&text) {
+            Ok(orig) if orig == table => toml::from_str(&text),
+            _ => toml::Table::try_into(table.clone()),
+        }
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+        let m = Manifest {
+            path: path.to_owned(),
+            run: raw.run,
+            site: raw.site,
+            processes: raw.process,
+            table,
+            text,
+        };
+        m.check()?;
+        Ok(m)
+    }
+
+    fn err(&self, key: &str, msg: impl std::fmt::Display) -> anyhow::Error {
+        match line_of(&self.text, key) {
+            Some(line) => anyhow::anyhow!("{}:{line}: {key}: {msg}", self.path.display()),
+            None => anyhow::anyhow!("{}: {key}: {msg}", self.path.display()),
+        }
+    }
+
+    fn check(&self) -> anyhow::Result<()> {
+        let r = &self.run;
+        if !(r.duration_s > 0.0 && r.duration_s.is_finite()) {
+            return Err(self.err(
+                "run.duration_s",
+                format!("must be a positive number of seconds, got {}", r.duration_s),
+            ));
+        }
+        if !(r.rate > 0.0 && r.rate.is_finite()) {
+            return Err(self.err(
+                "run.rate",
+                format!("must be a positive number, got {}", r.rate),
+            ));
+        }
+        ClockMode::parse(&r.clock, r.rate).map_err(|e| self.err("run.clock", e))?;
+        if r.namespace != "auto" {
+            crate::Namespace::new(&r.namespace).map_err(|e| self.err("run.namespace", e))?;
+        }
+        if let Some(s) = &self.site {
+            if !(s.latitude_deg.abs() <= 90.0) {
+                return Err(self.err(
+                    "site.latitude_deg",
+                    format!("must be within ±90, got {}", s.latitude_deg),
+                ));
+            }
+            if !(s.longitude_deg.abs() <= 180.0) {
+                return Err(self.err(
+                    "site.longitude_deg",
+                    format!("must be within ±180, got {}", s.longitude_deg),
+                ));
+            }
+            if !(s.magnetic_declination_deg.abs() <= 180.0) {
+                return Err(self.err(
+                    "site.magnetic_declination_deg",
+                    format!("must be within ±180, got {}", s.magnetic_declination_deg),
+                ));
+            }
+        }
+        for (name, p) in &self.processes {
+            if let Some(v) = &p.variant
+                && !p.variants.is_empty()
+                && !p.variants.contains_key(v)
+            {
+                let known: Vec<_> = p.variants.keys().cloned().collect();
+                return Err(self.err(
+                    &format!("process.{name}.variant"),
+                    format!("unknown variant {v:?}; the manifest defines {known:?}"),
+                ));
+            }
+            for a in &p.after {
+                if !self.processes.contains_key(a) {
+                    return Err(self.err(
+                        &format!("process.{name}.after"),
+                        format!("no process named {a:?}"),
+                    ));
+                }
+            }
+            check_finite(&p.params).map_err(|k| {
+                self.err(
+                    &format!("process.{name}.params.{k}"),
+                    "must be a finite number",
+                )
+            })?;
+            for (v, t) in &p.variants {
+                check_finite(t).map_err(|k| {
+                    self.err(
+                        &format!("process.{name}.variants.{v}.{k}"),
+                        "must be a finite number",
+                    )
+                })?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The clock mode of the run.
+    pub fn clock(&self) -> ClockMode {
+        // Checked in `check`.
+        ClockMode::parse(&self.run.clock, self.run.rate).unwrap_or(ClockMode::Sim)
+    }
+
+    /// The effective manifest as TOML (after overrides), to hand to processes.
+    pub fn to_toml(&self) -> anyhow::Result<String> {
+        Ok(toml::to_string(&self.table)?)
+    }
+
+    /// The section of process `name`.
+    pub fn process(&self, name: &str) -> anyhow::Result<&ProcessSection> {
+        self.processes
+            .get(name)
+            .ok_or_else(|| anyhow::anyhow!("{}: no [process.{name}]", self.path.display()))
+    }
+
+    /// Parameters of process `name` for `variant`: the variant's table over the
+    /// common `params`, deserialized into `T` (which should deny unknown fields).
+    pub fn params<T: DeserializeOwned>(
+        &self,
+        name: &str,
+        variant: Option<&str>,
+    ) -> anyhow::Result<T> {
+        let p = self.process(name)?;
+        let mut merged = p.params.clone();
+        let mut where_ = format!("process.{name}.params");
+        if let Some(v) = variant.or(p.variant.as_deref()) {
+            if let Some(t) = p.variants.get(v) {
+                for (k, val) in t {
+                    merged.insert(k.clone(), val.clone());
+                }
+                where_ = format!("process.{name}.params/variants.{v}");
+            } else if !p.variants.is_empty() {
+                bail!(
+                    "{}: process.{name}: unknown variant {v:?}",
+                    self.path.display()
+                );
+            }
+        }
+        toml::Table::try_into(merged).map_err(|e| self.err(&where_, e.to_string().trim_end()))
+    }
+}
+
+fn check_finite(t: &toml::Table) -> Result<(), String> {
+    for (k, v) in t {
+        match v {
+            toml::Value::Float(f) if !f.is_finite() => return Err(k.clone()),
+            toml::Value::Table(inner) => check_finite(inner).map_err(|sub| format!("{k}.{sub}"))?,
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// The 1-based line where the last component of a dotted `key` is set, if found.
+fn line_of(text: &str, key: &str) -> Option<usize> {
+    let last = key.rsplit('.').next()?;
+    let section = key.rsplit_once('.').map(|(s, _)| s).unwrap_or("");
+    let mut in_section = section.is_empty();
+    let mut fallback = None;
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.starts_with('[') {
+            let name = t.trim_matches(|c| c == '[' || c == ']').trim();
+            in_section = name == section || section.starts_with(&format!("{name}."));
+            continue;
+        }
+        let Some((k, _)) = t.split_once('=') else {
+            continue;
+        };
+        let k = k.trim();
+        if k == last || k.ends_with(&format!(".{last}")) {
+            if in_section {
+                return Some(i + 1);
+            }
+            fallback.get_or_insert(i + 1);
+        }
+    }
+    fallback
+}
+
+/// Applies `run.KEY=VALUE` or `PROCESS.KEY=VALUE` (KEY may be dotted) to the table.
+/// VALUE is read as TOML (`3`, `1.5`, `true`, `"x"`, `[1, 2]`), else as a string.
+pub fn apply_override(table: &mut toml::Table, spec: &str) -> anyhow::Result<()> {
+    let (path, value) = spec
+        .split_once('=')
+        .ok_or_else(|| anyhow::anyhow!("expected KEY=VALUE"))?;
+    let value: toml::Value = format!("v = {value}")
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(value.to_owned()));
+    let mut parts: Vec<&str> = path.trim().split('.').collect();
+    if parts.len() < 2 || parts.iter().any(|p| p.is_empty()) {
+        bail!("expected run.KEY or PROCESS.KEY, got {path:?}");
+    }
+    if parts[0] != "run" && parts[0] != "site" {
+        if !table
+            .get("process")
+            .and_then(|p| p.as_table())
+            .is_some_and(|p| p.contains_key(parts[0]))
+        {
+            bail!("no process named {:?} in the manifest", parts[0]);
+        }
+        parts.insert(0, "process");
+    }
+    let (last, dirs) = parts
+        .split_last()
+        .ok_or_else(|| anyhow::anyhow!("empty key"))?;
+    let mut cur = table;
+    for d in dirs {
+        cur = cur
+            .entry(d.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .ok_or_else(|| anyhow::anyhow!("{d} is not a table"))?;
+    }
+    cur.insert(last.to_string(), value);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+[run]
+clock = "sim"
+duration_s = 60
+seed = 7
+
+[site]
+latitude_deg = 38.7
+longitude_deg = -9.1
+
+[process.attitude]
+bin = "nauta-attitude"
+variant = "gyro"
+variants.gyro = { gain = 1.5 }
+params = { publish = true }
+"#;
+
+    #[derive(Debug, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct P {
+        gain: f64,
+        publish: bool,
+    }
+
+    #[test]
+    fn parses_and_merges_params() {
+        let m = Manifest::parse(Path::new("m.toml"), GOOD).expect("parses");
+        assert_eq!(m.run.seed, 7);
+        let p: P = m.params("attitude", None).expect("params");
+        assert!((p.gain - 1.5).abs() < 1e-12);
+        assert!(p.publish);
+    }
+
+    #[test]
+    fn unknown_key_names_file_line_and_key() {
+        let bad = GOOD.replace("seed = 7", "seed = 7\nsped = 3");
+        let e = Manifest::parse(Path::new("m.toml"), &bad)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("m.toml") && e.contains("sped") && e.contains("line 6"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn bad_values_are_refused_with_place() {
+        let bad = GOOD.replace("duration_s = 60", "duration_s = -1");
+        let e = Manifest::parse(Path::new("m.toml"), &bad)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("m.toml:4") && e.contains("run.duration_s"),
+            "{e}"
+        );
+        let bad = GOOD.replace("gain = 1.5", "gain = nan");
+        let e = Manifest::parse(Path::new("m.toml"), &bad)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("variants.gyro.gain"), "{e}");
+        let bad = GOOD.replace("variant = \"gyro\"", "variant = \"pf\"");
+        let e = Manifest::parse(Path::new("m.toml"), &bad)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown variant"), "{e}");
+    }
+
+    #[test]
+    fn overrides() {
+        let mut t: toml::Table = toml::from_str(GOOD).expect("toml");
+        apply_override(&mut t, "run.duration_s=5").expect("run");
+        apply_override(&mut t, "attitude.variants.gyro.gain=2").expect("proc");
+        apply_override(&mut t, "run.clock=wall").expect("string");
+        assert!(apply_override(&mut t, "nobody.x=1").is_err());
+        let m = Manifest::from_table(Path::new("m.toml"), t, String::new()).expect("valid");
+        assert!((m.run.duration_s - 5.0).abs() < 1e-12);
+        assert_eq!(m.run.clock, "wall");
+        let p: P = m.params("attitude", None).expect("params");
+        assert!((p.gain - 2.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,175 @@
+//! Per-run namespaces (DESIGN §6): every run gets its own iceoryx2 `global.prefix`,
+//! so runs and tests never see each other's services, and its own resources can
+//! be listed and removed.
+
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use iceoryx2::config::Config;
+use iceoryx2::node::NodeView;
+use iceoryx2::prelude::*;
+
+use crate::Ipc;
+
+/// Longest namespace accepted (the prefix ends up in file names).
+pub const MAX_LEN: usize = 32;
+
+/// A validated run namespace: 1-32 characters of `[A-Za-z0-9-]`.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Namespace(String);
+
+/// The namespace is not acceptable.
+#[derive(Debug, thiserror::Error)]
+#[error("invalid namespace {0:?}: use 1-{MAX_LEN} characters of A-Z, a-z, 0-9 and '-'")]
+pub struct NamespaceError(pub String);
+
+impl Namespace {
+    /// Validates `name`.
+    pub fn new(name: &str) -> Result<Self, NamespaceError> {
+        let ok = !name.is_empty()
+            && name.len() <= MAX_LEN
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-');
+        if ok {
+            Ok(Namespace(name.to_owned()))
+        } else {
+            Err(NamespaceError(name.to_owned()))
+        }
+    }
+
+    /// A namespace unique on this machine: pid, time and a per-process counter.
+    pub fn unique() -> Self {
+        static COUNTER: AtomicU32 = AtomicU32::new(0);
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos() as u64)
+            .unwrap_or(0);
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        Namespace(format!(
+            "r{:x}-{:x}-{:x}",
+            std::process::id(),
+            nanos & 0xff_ffff_ffff,
+            n
+        ))
+    }
+
+    /// The namespace as given.
+    pub fn as_str(&self) -> &str {
+        &self.0
+    }
+
+    /// The iceoryx2 prefix of every resource of this run (`nauta_<ns>_`).
+    pub fn prefix(&self) -> String {
+        format!("nauta_{}_", self.0)
+    }
+
+    /// The iceoryx2 configuration of this run.
+    pub fn config(&self) -> anyhow::Result<Config> {
+        let mut config = Config::global_config().clone();
+        config.global.prefix = FileName::new(self.prefix().as_bytes())
+            .map_err(|e| anyhow::anyhow!("namespace prefix {:?}: {e:?}", self.prefix()))?;
+        // Dead nodes of this run are removed whenever a node starts or a service opens.
+        config.global.node.cleanup_dead_nodes_on_creation = true;
+        config.global.service.cleanup_dead_nodes_on_open = true;
+        Ok(config)
+    }
+
+    /// Files of this run in /dev/shm (shared memory segments), by name.
+    pub fn shm_files(&self) -> Vec<String> {
+        files_with_prefix("/dev/shm", &self.prefix())
+    }
+
+    /// Every file of this run in /dev/shm and under iceoryx2's root directory.
+    pub fn all_files(&self, config: &Config) -> Vec<String> {
+        let mut files = self.shm_files();
+        let root = config.global.root_path().to_string();
+        walk(std::path::Path::new(&root), &self.prefix(), &mut files);
+        files
+    }
+}
+
+impl std::fmt::Display for Namespace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+fn files_with_prefix(dir: &str, prefix: &str) -> Vec<String> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut out: Vec<String> = entries
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(prefix))
+        .collect();
+    out.sort();
+    out
+}
+
+fn walk(dir: &std::path::Path, prefix: &str, out: &mut Vec<String>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.filter_map(|e| e.ok()) {
+        let path = e.path();
+        if path.is_dir() {
+            walk(&path, prefix, out);
+        } else if e.file_name().to_string_lossy().starts_with(prefix) {
+            out.push(path.to_string_lossy().into_owned());
+        }
+    }
+}
+
+/// What a cleanup pass found.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CleanupReport {
+    /// Dead nodes whose resources were removed.
+    pub removed: u64,
+    /// Dead nodes that could not be removed (permissions, or another process is at it).
+    pub failed: u64,
+    /// Nodes still alive.
+    pub alive: u64,
+}
+
+/// Removes the stale resources of every dead node under `config` (processes that
+/// died without cleaning up, e.g. by `kill -9`). Safe to call at any time.
+pub fn cleanup_dead_nodes(config: &Config) -> anyhow::Result<CleanupReport> {
+    let mut report = CleanupReport::default();
+    let mut dead = Vec::new();
+    Node::<Ipc>::list(config, |state| {
+        match state {
+            NodeState::Alive(_) => report.alive += 1,
+            NodeState::Dead(view) => dead.push(view),
+            NodeState::Inaccessible(_) | NodeState::Undefined(_) => {}
+        }
+        CallbackProgression::Continue
+    })
+    .map_err(|e| anyhow::anyhow!("cannot list the nodes of this run: {e:?}"))?;
+    for view in dead {
+        let id = *view.id();
+        match view.try_remove_stale_resources() {
+            Ok(()) => report.removed += 1,
+            Err(e) => {
+                tracing::debug!(node = ?id, error = ?e, "dead node not removed");
+                report.failed += 1;
+            }
+        }
+    }
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validation() {
+        assert!(Namespace::new("run-1").is_ok());
+        assert!(Namespace::new("").is_err());
+        assert!(Namespace::new("a/b").is_err());
+        assert!(Namespace::new("x".repeat(MAX_LEN + 1).as_str()).is_err());
+        let a = Namespace::unique();
+        let b = Namespace::unique();
+        assert_ne!(a, b);
+        assert!(Namespace::new(a.as_str()).is_ok(), "{a}");
+    }
+}

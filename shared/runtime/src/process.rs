@@ -1,0 +1,47 @@
+//! The binary contract of DESIGN §5: how the launcher starts a service binary.
+//!
+//! `nauta-<role> --manifest FILE --process NAME --namespace NS --instance K
+//! [--variant V] [--standby]`, or `nauta-<role> --describe`.
+
+use std::path::PathBuf;
+
+/// Arguments every service binary accepts (flatten into the binary's own parser).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ProcessArgs {
+    /// The (effective) manifest of the run; the process reads its parameters from it.
+    #[arg(long, required_unless_present = "describe")]
+    pub manifest: Option<PathBuf>,
+    /// This process's name in the manifest (defaults to the role's name).
+    #[arg(long)]
+    pub process: Option<String>,
+    /// The run's namespace.
+    #[arg(long, required_unless_present = "describe")]
+    pub namespace: Option<String>,
+    /// How many times the launcher has started this role in this run.
+    #[arg(long, default_value_t = 0)]
+    pub instance: u32,
+    /// The implementation to run (overrides the manifest's `variant`).
+    #[arg(long)]
+    pub variant: Option<String>,
+    /// Start in standby: follow the inputs without publishing (hot swap).
+    #[arg(long)]
+    pub standby: bool,
+    /// Print the input and output services and types as JSON and exit.
+    #[arg(long)]
+    pub describe: bool,
+}
+
+/// Installs the tracing subscriber every nauta binary uses: compact lines on
+/// stderr, level from `NAUTA_LOG` (default `info`).
+pub fn init_tracing() {
+    let filter = tracing_subscriber::EnvFilter::try_from_env("NAUTA_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .compact()
+        .try_init();
+    // iceoryx2 logs on its own; keep it to real problems.
+    iceoryx2::prelude::set_log_level(iceoryx2::prelude::LogLevel::Error);
+}

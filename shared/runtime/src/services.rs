@@ -1,0 +1,170 @@
+//! Every service of DESIGN §4, defined once: name, type and QoS. iceoryx2 takes the
+//! QoS of whoever creates a service as a requirement for everyone who opens it,
+//! so every participant must open a service through the function defined here.
+
+use core::marker::PhantomData;
+
+use nauta_messages::*;
+
+/// Publishers allowed per service: a role, its hot-swap standby, a replay and a test tap.
+pub const MAX_PUBLISHERS: usize = 4;
+/// Subscribers allowed per service: consumers, logger, launcher monitor, a standby.
+pub const MAX_SUBSCRIBERS: usize = 16;
+/// Nodes allowed per service.
+pub const MAX_NODES: usize = 32;
+/// Publishers allowed on `run/events` and other run-wide services: every process.
+pub const MAX_RUN_PUBLISHERS: usize = 32;
+
+/// Delivery of a data service.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Delivery {
+    /// Follows the run's clock: lossless with back-pressure in `sim`, bounded
+    /// buffers that overwrite the oldest sample in `wall`.
+    ByClock,
+    /// Always overwrites the oldest sample: a publisher never waits (health,
+    /// progress, events: nothing may stall on them).
+    Lossy,
+}
+
+/// A publish-subscribe service: name (without the run namespace), message type and QoS.
+#[derive(Debug)]
+pub struct ServiceSpec<M: Message> {
+    /// Service name without the namespace, e.g. `sensor/imu`.
+    pub name: String,
+    /// Subscriber queue length, samples.
+    pub buffer: usize,
+    /// Samples kept for late subscribers.
+    pub history: usize,
+    /// Publishers allowed.
+    pub max_publishers: usize,
+    /// How it delivers.
+    pub delivery: Delivery,
+    _m: PhantomData<M>,
+}
+
+impl<M: Message> Clone for ServiceSpec<M> {
+    fn clone(&self) -> Self {
+        ServiceSpec {
+            name: self.name.clone(),
+            buffer: self.buffer,
+            history: self.history,
+            max_publishers: self.max_publishers,
+            delivery: self.delivery,
+            _m: PhantomData,
+        }
+    }
+}
+
+impl<M: Message> ServiceSpec<M> {
+    fn data(name: &str, buffer: usize) -> Self {
+        ServiceSpec {
+            name: name.to_owned(),
+            buffer,
+            history: 0,
+            max_publishers: MAX_PUBLISHERS,
+            delivery: Delivery::ByClock,
+            _m: PhantomData,
+        }
+    }
+
+    fn latest(name: &str, max_publishers: usize) -> Self {
+        ServiceSpec {
+            name: name.to_owned(),
+            buffer: 16,
+            history: 1,
+            max_publishers,
+            delivery: Delivery::Lossy,
+            _m: PhantomData,
+        }
+    }
+
+    /// The type name on the wire.
+    pub fn type_name(&self) -> &'static str {
+        M::TYPE_NAME
+    }
+}
+
+/// Queue length for 100 Hz streams: 2.5 s of data, so a consumer can batch.
+const FAST: usize = 256;
+/// Queue length for ≤ 10 Hz streams.
+const SLOW: usize = 64;
+
+/// `sensor/imu`.
+pub fn imu() -> ServiceSpec<ImuSample> {
+    ServiceSpec::data(IMU_SERVICE, FAST)
+}
+/// `sensor/dvl`.
+pub fn dvl() -> ServiceSpec<DvlSample> {
+    ServiceSpec::data(DVL_SERVICE, SLOW)
+}
+/// `sensor/depth`.
+pub fn depth() -> ServiceSpec<DepthSample> {
+    ServiceSpec::data(DEPTH_SERVICE, SLOW)
+}
+/// `sensor/gps`.
+pub fn gps() -> ServiceSpec<GpsFix> {
+    ServiceSpec::data(GPS_SERVICE, SLOW)
+}
+/// `sensor/ahrs`.
+pub fn ahrs() -> ServiceSpec<AhrsSample> {
+    ServiceSpec::data(AHRS_SERVICE, SLOW)
+}
+/// `sensor/propeller`.
+pub fn propeller() -> ServiceSpec<PropellerSample> {
+    ServiceSpec::data(PROPELLER_SERVICE, SLOW)
+}
+/// `sensor/modem`.
+pub fn modem() -> ServiceSpec<BuoyRange> {
+    ServiceSpec::data(MODEM_SERVICE, SLOW)
+}
+/// `sensor/lbl`.
+pub fn lbl_reply() -> ServiceSpec<LblReply> {
+    ServiceSpec::data(LBL_REPLY_SERVICE, SLOW)
+}
+/// `lbl/interrogate`.
+pub fn lbl_interrogate() -> ServiceSpec<LblInterrogation> {
+    ServiceSpec::data(LBL_INTERROGATE_SERVICE, SLOW)
+}
+/// `sim/truth`.
+pub fn truth() -> ServiceSpec<TruthState> {
+    ServiceSpec::data(TRUTH_SERVICE, FAST)
+}
+/// `attitude/estimate`.
+pub fn attitude_estimate() -> ServiceSpec<AttitudeEstimate> {
+    ServiceSpec::data(ATTITUDE_ESTIMATE_SERVICE, FAST)
+}
+/// `ains/nav`.
+pub fn nav_solution() -> ServiceSpec<NavSolution> {
+    ServiceSpec::data(NAV_SOLUTION_SERVICE, FAST)
+}
+/// `positioning/fix`.
+pub fn position_fix() -> ServiceSpec<PositionFix> {
+    ServiceSpec::data(POSITION_FIX_SERVICE, SLOW)
+}
+/// `lbl/nav`.
+pub fn lbl_solution() -> ServiceSpec<LblSolution> {
+    ServiceSpec::data(LBL_SOLUTION_SERVICE, SLOW)
+}
+/// `<role>/snapshot`: the latest is kept for late subscribers (history 1).
+pub fn snapshot<M: Message>(role: Role) -> ServiceSpec<M> {
+    ServiceSpec::latest(&snapshot_service(role.name()), MAX_PUBLISHERS)
+}
+/// `<role>/health`.
+pub fn health(role: Role) -> ServiceSpec<Health> {
+    ServiceSpec::latest(&health_service(role.name()), MAX_PUBLISHERS)
+}
+/// `<role>/progress`: watermarks, lossless like the data they qualify.
+pub fn progress(role: Role) -> ServiceSpec<Progress> {
+    ServiceSpec::data(&progress_service(role.name()), SLOW)
+}
+/// `run/events`: every process publishes; never blocks anybody.
+pub fn run_events() -> ServiceSpec<RunEvent> {
+    ServiceSpec {
+        name: RUN_EVENTS_SERVICE.to_owned(),
+        buffer: 256,
+        history: 0,
+        max_publishers: MAX_RUN_PUBLISHERS,
+        delivery: Delivery::Lossy,
+        _m: PhantomData,
+    }
+}
