@@ -5,6 +5,9 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod bench;
+mod children;
+mod launch;
+mod monitor;
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
 #[derive(Debug, Parser)]
@@ -16,6 +19,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run a pipeline from a manifest (e.g. `nauta launch launch/survey.toml --duration 60 --fast`).
+    Launch(launch::LaunchArgs),
     /// Benchmarks (use a release build).
     Bench {
         #[command(subcommand)]
@@ -41,6 +46,7 @@ enum BenchCommand {
 }
 
 fn main() -> ExitCode {
+    nauta_runtime::process::init_tracing();
     let cli = Cli::parse();
     match run(cli) {
         Ok(code) => code,
@@ -53,6 +59,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
+        Command::Launch(args) => launch::run(&args).map(ExitCode::from),
         Command::Bench { which } => match which {
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
         },

@@ -1,1 +1,31 @@
+//! nauta's navigation math: pure functions and estimator cores with no IPC
+//! (DESIGN §3). Services wrap these in ports, a clock and configuration; tests use
+//! them in-process.
+//!
+//! Frames and conventions (DESIGN §4): navigation frame NED, body frame FRD,
+//! attitude `q_nb` (Hamilton, `[w, x, y, z]`) rotating body vectors into NED,
+//! geodetic latitude/longitude in radians on WGS84, heights positive up.
+//!
+//! - [`earth`]: WGS84 constants, radii of curvature, gravity, Earth and transport
+//!   rates, geodetic ↔ ECEF.
+//! - [`attitude`]: quaternion and Euler conventions, rotation vectors, the exact
+//!   attitude update and its sensor-side inverse, attitude error metrics.
+//! - [`alignment`]: static coarse alignment from accelerometer and magnetometer.
+//! - [`estimator`]: the [`AttitudeEstimator`] role trait and its snapshot.
+//! - [`gyro`]: pure gyro integration, paper 000's baseline.
+//!
+//! Equations name the paper (`../shared/papers/`, by number) or the textbook
+//! (Titterton & Weston 2004; Groves 2013; Farrell 2008) they implement.
 
+#![forbid(unsafe_code)]
+
+pub mod alignment;
+pub mod attitude;
+pub mod earth;
+pub mod estimator;
+pub mod gyro;
+
+pub use alignment::Alignment;
+pub use attitude::{AttitudeError, HeadingInclinationError};
+pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot};
+pub use gyro::{GyroIntegrator, GyroState};

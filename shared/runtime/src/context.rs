@@ -336,6 +336,17 @@ impl Context {
         self.node.wait(Duration::ZERO).is_err()
     }
 
+    /// Leaves the run: drops the node and, if this was the last live node of the
+    /// namespace, removes what is left of the run (see
+    /// [`Namespace::remove_if_unused`]). Drop every port first.
+    pub fn finish(self) {
+        let namespace = self.namespace.clone();
+        drop(self);
+        if let Err(e) = namespace.remove_if_unused() {
+            tracing::debug!(error = %e, "run resources not removed");
+        }
+    }
+
     /// Sleeps up to `d`, returning false when a termination signal arrived.
     pub fn sleep(&self, d: Duration) -> bool {
         self.node.wait(d).is_ok()

@@ -72,9 +72,58 @@ impl Namespace {
         Ok(config)
     }
 
+    /// Removes every resource of this run when no node of it is alive: the stale
+    /// resources of dead nodes, then what iceoryx2 keeps per namespace on purpose
+    /// (its persistent global management segment) and anything else bearing the
+    /// run's prefix. Returns the number of files removed; nothing is touched while
+    /// a node of the run lives.
+    pub fn remove_if_unused(&self) -> anyhow::Result<usize> {
+        let config = self.config()?;
+        let report = cleanup_dead_nodes(&config)?;
+        if report.alive > 0 || report.failed > 0 {
+            return Ok(0);
+        }
+        let mut removed = 0;
+        for f in self.shm_files() {
+            if std::fs::remove_file(std::path::Path::new("/dev/shm").join(&f)).is_ok() {
+                removed += 1;
+            }
+        }
+        let mut rest = Vec::new();
+        walk(
+            std::path::Path::new(&config.global.root_path().to_string()),
+            &self.prefix(),
+            &mut rest,
+        );
+        for f in rest {
+            if std::fs::remove_file(&f).is_ok() {
+                removed += 1;
+            }
+        }
+        Ok(removed)
+    }
+
     /// Files of this run in /dev/shm (shared memory segments), by name.
     pub fn shm_files(&self) -> Vec<String> {
         files_with_prefix("/dev/shm", &self.prefix())
+    }
+
+    /// The namespaces that have files on this machine (in /dev/shm or under
+    /// iceoryx2's root directory), from their prefixes.
+    pub fn on_this_machine() -> Vec<Namespace> {
+        let mut names = std::collections::BTreeSet::new();
+        let mut files = files_with_prefix("/dev/shm", "nauta_");
+        let root = Config::global_config().global.root_path().to_string();
+        walk(std::path::Path::new(&root), "nauta_", &mut files);
+        for f in files {
+            let name = f.rsplit('/').next().unwrap_or(&f);
+            if let Some((ns, _)) = name.strip_prefix("nauta_").and_then(|r| r.split_once('_'))
+                && let Ok(ns) = Namespace::new(ns)
+            {
+                names.insert(ns.0);
+            }
+        }
+        names.into_iter().map(Namespace).collect()
     }
 
     /// Every file of this run in /dev/shm and under iceoryx2's root directory.

@@ -168,3 +168,85 @@ pub fn run_events() -> ServiceSpec<RunEvent> {
         _m: PhantomData,
     }
 }
+
+/// A service definition without its Rust type (for discovery and the logger).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SpecInfo {
+    /// Service name without namespace.
+    pub name: String,
+    /// Pinned type name.
+    pub type_name: &'static str,
+    /// Subscriber queue length.
+    pub buffer: usize,
+    /// History for late subscribers.
+    pub history: usize,
+    /// Publishers allowed.
+    pub max_publishers: usize,
+    /// Delivery.
+    pub delivery: Delivery,
+}
+
+impl<M: Message> From<&ServiceSpec<M>> for SpecInfo {
+    fn from(s: &ServiceSpec<M>) -> Self {
+        SpecInfo {
+            name: s.name.clone(),
+            type_name: M::TYPE_NAME,
+            buffer: s.buffer,
+            history: s.history,
+            max_publishers: s.max_publishers,
+            delivery: s.delivery,
+        }
+    }
+}
+
+/// Every service a run can have, with its definition.
+pub fn all() -> Vec<SpecInfo> {
+    let mut v: Vec<SpecInfo> = vec![
+        (&imu()).into(),
+        (&dvl()).into(),
+        (&depth()).into(),
+        (&gps()).into(),
+        (&ahrs()).into(),
+        (&propeller()).into(),
+        (&modem()).into(),
+        (&lbl_reply()).into(),
+        (&lbl_interrogate()).into(),
+        (&truth()).into(),
+        (&attitude_estimate()).into(),
+        (&nav_solution()).into(),
+        (&position_fix()).into(),
+        (&lbl_solution()).into(),
+        (&run_events()).into(),
+        (&snapshot::<AttitudeSnapshot>(Role::Attitude)).into(),
+        (&snapshot::<AinsSnapshot>(Role::Ains)).into(),
+        (&snapshot::<PositioningSnapshot>(Role::Positioning)).into(),
+        (&snapshot::<LblSnapshot>(Role::Lbl)).into(),
+    ];
+    for role in Role::ALL {
+        v.push((&health(role)).into());
+        v.push((&progress(role)).into());
+    }
+    v
+}
+
+/// The definition of service `name` with message type `M`.
+pub fn by_name<M: Message>(name: &str) -> anyhow::Result<ServiceSpec<M>> {
+    let info = all()
+        .into_iter()
+        .find(|s| s.name == name)
+        .ok_or_else(|| anyhow::anyhow!("unknown service {name:?}"))?;
+    anyhow::ensure!(
+        info.type_name == M::TYPE_NAME,
+        "service {name} carries {}, not {}",
+        info.type_name,
+        M::TYPE_NAME
+    );
+    Ok(ServiceSpec {
+        name: info.name,
+        buffer: info.buffer,
+        history: info.history,
+        max_publishers: info.max_publishers,
+        delivery: info.delivery,
+        _m: PhantomData,
+    })
+}

@@ -1,0 +1,149 @@
+//! Starting and stopping the processes of a run (DESIGN §5 binary contract).
+
+use std::os::unix::process::{CommandExt, ExitStatusExt};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+
+use anyhow::Context as _;
+use nauta_runtime::Describe;
+
+/// Finds `nauta-<role>` next to the running `nauta` executable, then on PATH.
+pub fn find_binary(bin: &str) -> anyhow::Result<PathBuf> {
+    if let Ok(exe) = std::env::current_exe()
+        && let Some(dir) = exe.parent()
+    {
+        let p = dir.join(bin);
+        if p.is_file() {
+            return Ok(p);
+        }
+    }
+    if let Some(path) = std::env::var_os("PATH") {
+        for dir in std::env::split_paths(&path) {
+            let p = dir.join(bin);
+            if p.is_file() {
+                return Ok(p);
+            }
+        }
+    }
+    anyhow::bail!(
+        "binary {bin:?} not found next to nauta or on PATH (build the workspace: cargo build --release)"
+    )
+}
+
+/// Runs `bin --describe` and parses its answer.
+pub fn describe(bin: &Path) -> anyhow::Result<Describe> {
+    let out = Command::new(bin)
+        .arg("--describe")
+        .stderr(Stdio::inherit())
+        .output()
+        .with_context(|| format!("cannot run {} --describe", bin.display()))?;
+    anyhow::ensure!(
+        out.status.success(),
+        "{} --describe failed: {}",
+        bin.display(),
+        out.status
+    );
+    serde_json::from_slice(&out.stdout)
+        .with_context(|| format!("{} --describe printed invalid JSON", bin.display()))
+}
+
+/// A started process.
+#[derive(Debug)]
+pub struct Running {
+    /// Name in the manifest.
+    pub name: String,
+    /// The child.
+    pub child: Child,
+    /// Exit status, once reaped.
+    pub status: Option<ExitStatus>,
+}
+
+/// What to start.
+#[derive(Debug, Clone)]
+pub struct Launch<'a> {
+    /// Binary path.
+    pub bin: &'a Path,
+    /// Process name.
+    pub name: &'a str,
+    /// Effective manifest file.
+    pub manifest: &'a Path,
+    /// Namespace.
+    pub namespace: &'a str,
+    /// Instance.
+    pub instance: u32,
+    /// Variant, if any.
+    pub variant: Option<&'a str>,
+    /// Extra arguments from the manifest.
+    pub args: &'a [String],
+}
+
+/// Starts a process in its own process group, set to receive SIGTERM if the
+/// launcher dies (so no orphans are left, even after `kill -9` of the launcher).
+pub fn spawn(l: &Launch<'_>) -> anyhow::Result<Running> {
+    let mut cmd = Command::new(l.bin);
+    cmd.arg("--manifest")
+        .arg(l.manifest)
+        .args(["--process", l.name, "--namespace", l.namespace])
+        .args(["--instance", &l.instance.to_string()]);
+    if let Some(v) = l.variant {
+        cmd.args(["--variant", v]);
+    }
+    cmd.args(l.args).stdin(Stdio::null()).process_group(0);
+    // SAFETY: prctl is async-signal-safe and touches only the calling (child) process.
+    unsafe {
+        cmd.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let child = cmd
+        .spawn()
+        .with_context(|| format!("cannot start {} ({})", l.name, l.bin.display()))?;
+    Ok(Running {
+        name: l.name.to_owned(),
+        child,
+        status: None,
+    })
+}
+
+impl Running {
+    /// Reaps the child if it has exited; true when it has.
+    pub fn poll(&mut self) -> bool {
+        if self.status.is_some() {
+            return true;
+        }
+        match self.child.try_wait() {
+            Ok(Some(s)) => {
+                self.status = Some(s);
+                true
+            }
+            Ok(None) => false,
+            Err(_) => false,
+        }
+    }
+
+    /// Sends SIGTERM (no effect once exited).
+    pub fn terminate(&self) {
+        if self.status.is_none() {
+            // SAFETY: plain kill(2) on our own child's pid.
+            unsafe {
+                libc::kill(self.child.id() as i32, libc::SIGTERM);
+            }
+        }
+    }
+
+    /// Sends SIGKILL.
+    pub fn kill(&mut self) {
+        if self.status.is_none() {
+            let _ = self.child.kill();
+        }
+    }
+
+    /// Exit code, or minus the signal that ended it.
+    pub fn code(&self) -> Option<i32> {
+        self.status
+            .map(|s| s.code().unwrap_or_else(|| -s.signal().unwrap_or(0)))
+    }
+}

@@ -1,0 +1,395 @@
+//! `nauta launch`: run a pipeline from a manifest (DESIGN §5, §9).
+
+use std::collections::BTreeMap;
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context as _, bail};
+use nauta_messages::*;
+use nauta_runtime::ports::Inbox;
+use nauta_runtime::{Context, Describe, EventLoop, LoopExit, Manifest, Namespace, Wake, services};
+
+use crate::children::{self, Launch, Running};
+use crate::monitor::{self, Observer, Tap};
+
+/// Options of `nauta launch`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LaunchArgs {
+    /// The manifest (e.g. launch/survey.toml).
+    pub manifest: PathBuf,
+    /// Clock: `sim` (as fast as possible, deterministic) or `wall` (real time).
+    #[arg(long)]
+    pub clock: Option<String>,
+    /// Same as `--clock sim`.
+    #[arg(long, conflicts_with = "clock")]
+    pub fast: bool,
+    /// Pace `wall` at this multiple of real time.
+    #[arg(long)]
+    pub rate: Option<f64>,
+    /// Mission duration in simulated seconds.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Seed of every random generator of the run.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Run in this namespace instead of a unique one.
+    #[arg(long)]
+    pub namespace: Option<String>,
+    /// Override a manifest value: `run.KEY=VALUE` or `PROCESS.KEY=VALUE`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// How long a process may take to report ready.
+const READY_TIMEOUT: Duration = Duration::from_secs(30);
+/// How long a process may take to stop after SIGTERM before it is killed.
+const STOP_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// Removes what dead processes of earlier runs left on this machine: the
+/// resources of dead nodes of every nauta namespace, and every file of a
+/// namespace none of whose nodes is alive.
+pub fn cleanup_stale_runs() -> usize {
+    Namespace::on_this_machine()
+        .into_iter()
+        .map(|ns| ns.remove_if_unused().unwrap_or(0))
+        .sum()
+}
+
+struct Proc {
+    name: String,
+    bin: PathBuf,
+    describe: Describe,
+}
+
+/// Runs the pipeline; returns the process exit code.
+pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
+    let mut overrides = args.set.clone();
+    if args.fast {
+        overrides.push("run.clock=\"sim\"".into());
+    }
+    if let Some(c) = &args.clock {
+        overrides.push(format!("run.clock=\"{c}\""));
+    }
+    if let Some(r) = args.rate {
+        overrides.push(format!("run.rate={r:?}"));
+    }
+    if let Some(d) = args.duration {
+        overrides.push(format!("run.duration_s={d:?}"));
+    }
+    if let Some(s) = args.seed {
+        overrides.push(format!("run.seed={s}"));
+    }
+    let manifest = Manifest::load_with(&args.manifest, &overrides)?;
+    let namespace = match (&args.namespace, manifest.run.namespace.as_str()) {
+        (Some(ns), _) => Namespace::new(ns)?,
+        (None, "auto") => Namespace::unique(),
+        (None, ns) => Namespace::new(ns)?,
+    };
+
+    // Binaries and their wiring, before anything starts.
+    let mut procs = Vec::new();
+    for (name, p) in &manifest.processes {
+        let bin = children::find_binary(&p.bin).with_context(|| format!("process {name}"))?;
+        let describe = children::describe(&bin).with_context(|| format!("process {name}"))?;
+        if let Some(v) = &p.variant
+            && !describe.variants.contains(v)
+        {
+            bail!(
+                "{}: process.{name}.variant: {} does not implement {v:?} (it has {:?})",
+                manifest.path.display(),
+                p.bin,
+                describe.variants
+            );
+        }
+        procs.push(Proc {
+            name: name.clone(),
+            bin,
+            describe,
+        });
+    }
+    check_wiring(&manifest, &procs)?;
+
+    let removed = cleanup_stale_runs();
+    if removed > 0 {
+        tracing::info!(
+            removed,
+            "removed files left by dead processes of earlier runs"
+        );
+    }
+    let run_dir = std::env::temp_dir().join("nauta").join(namespace.as_str());
+    std::fs::create_dir_all(&run_dir)
+        .with_context(|| format!("cannot create {}", run_dir.display()))?;
+    let manifest_file = run_dir.join("manifest.toml");
+    std::fs::write(&manifest_file, manifest.to_toml()?)?;
+
+    let mut settings = Context::settings(Role::Launcher);
+    settings.process = "launcher".into();
+    settings.clock = manifest.clock();
+    settings.deadline = Duration::from_millis(manifest.run.backpressure_deadline_ms);
+    let ctx = Context::new(&namespace, settings)?;
+    let (mut events, events_inbox) = ctx.subscriber(&services::run_events())?;
+
+    // Taps on every output, opened before any process starts so nothing is missed.
+    let mut taps: Vec<Box<dyn Tap>> = Vec::new();
+    let mut inboxes: Vec<Inbox> = Vec::new();
+    let mut seen = std::collections::BTreeSet::new();
+    for p in &procs {
+        for o in &p.describe.outputs {
+            if seen.insert(o.service.clone()) {
+                let (t, i) = monitor::tap(&ctx, &o.service, &o.type_name)?;
+                taps.push(t);
+                inboxes.push(i);
+            }
+        }
+    }
+
+    // Consumers first, sources (no inputs) last, each after the previous is ready.
+    let mut order: Vec<&Proc> = procs
+        .iter()
+        .filter(|p| !p.describe.inputs.is_empty())
+        .collect();
+    order.extend(procs.iter().filter(|p| p.describe.inputs.is_empty()));
+    let started = Instant::now();
+    let mut running: Vec<Running> = Vec::new();
+    let mut observer = Observer::default();
+    eprintln!(
+        "nauta: run {namespace}: {} clock, {} s mission, seed {}",
+        manifest.clock().name(),
+        manifest.run.duration_s,
+        manifest.run.seed
+    );
+    for p in &order {
+        let section = manifest.process(&p.name)?;
+        let mut r = children::spawn(&Launch {
+            bin: &p.bin,
+            name: &p.name,
+            manifest: &manifest_file,
+            namespace: namespace.as_str(),
+            instance: 0,
+            variant: section.variant.as_deref(),
+            args: &section.args,
+        })?;
+        if let Err(e) = wait_ready(&ctx, &mut events, &mut r, &mut taps, &mut observer) {
+            running.push(r);
+            stop_all(&mut running);
+            return Err(e);
+        }
+        running.push(r);
+    }
+
+    let exit = {
+        let inbox_refs: Vec<&Inbox> = inboxes.iter().collect();
+        EventLoop::new(Duration::from_millis(50)).run(&inbox_refs, |wake| {
+            for t in taps.iter_mut() {
+                t.drain(&mut observer)?;
+            }
+            if wake == Wake::Tick {
+                let _ = events.drain(|_| {});
+                let mut all_done = true;
+                for r in running.iter_mut() {
+                    all_done &= r.poll();
+                }
+                if all_done {
+                    for t in taps.iter_mut() {
+                        t.drain(&mut observer)?;
+                    }
+                    return Ok(ControlFlow::Break(()));
+                }
+                if let Some(failed) = running.iter().find(|r| r.code().is_some_and(|c| c != 0)) {
+                    tracing::error!(process = %failed.name, code = ?failed.code(), "process failed; stopping the run");
+                    return Ok(ControlFlow::Break(()));
+                }
+            }
+            Ok(ControlFlow::Continue(()))
+        })?
+    };
+    if exit == LoopExit::Signal {
+        eprintln!("nauta: stopping on signal");
+    }
+    stop_all(&mut running);
+    for t in taps.iter_mut() {
+        t.drain(&mut observer)?;
+    }
+    let wall = started.elapsed();
+    let summary_line = summary(
+        &manifest,
+        &namespace,
+        wall,
+        &taps,
+        &observer,
+        &failures(&running),
+        exit,
+    );
+    drop(taps);
+    drop(inboxes);
+    drop(events);
+    drop(events_inbox);
+    ctx.finish();
+    let _ = std::fs::remove_dir_all(&run_dir);
+
+    println!("{summary_line}");
+    Ok(if exit == LoopExit::Signal {
+        130
+    } else if failures(&running).is_empty() {
+        0
+    } else {
+        1
+    })
+}
+
+fn failures(running: &[Running]) -> Vec<String> {
+    running
+        .iter()
+        .filter(|r| r.code() != Some(0))
+        .map(|r| {
+            format!(
+                "{} exited {}",
+                r.name,
+                r.code().map_or("?".into(), |c| c.to_string())
+            )
+        })
+        .collect()
+}
+
+fn check_wiring(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
+    let mut published: BTreeMap<&str, (&str, &str)> = BTreeMap::new();
+    for p in procs {
+        for o in &p.describe.outputs {
+            published.insert(&o.service, (&o.type_name, &p.name));
+        }
+    }
+    for p in procs {
+        for i in &p.describe.inputs {
+            match published.get(i.service.as_str()) {
+                None => bail!(
+                    "{}: process.{}: subscribes to {} ({}), which no process publishes",
+                    manifest.path.display(),
+                    p.name,
+                    i.service,
+                    i.type_name
+                ),
+                Some((t, by)) if *t != i.type_name => bail!(
+                    "{}: process.{}: subscribes to {} as {}, but {by} publishes it as {t}",
+                    manifest.path.display(),
+                    p.name,
+                    i.service,
+                    i.type_name
+                ),
+                Some(_) => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+fn wait_ready(
+    ctx: &Context,
+    events: &mut nauta_runtime::Subscriber<RunEvent>,
+    r: &mut Running,
+    taps: &mut [Box<dyn Tap>],
+    observer: &mut Observer,
+) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    loop {
+        let mut ready = false;
+        events.drain(|e| {
+            if e.kind == event_kind::READY && fixed_str(&e.process) == r.name {
+                ready = true;
+            }
+        })?;
+        if ready {
+            return Ok(());
+        }
+        if r.poll() {
+            bail!(
+                "process {} exited before it was ready (exit {:?})",
+                r.name,
+                r.code()
+            );
+        }
+        if t0.elapsed() > READY_TIMEOUT {
+            bail!(
+                "process {} did not report ready within {READY_TIMEOUT:?}",
+                r.name
+            );
+        }
+        for t in taps.iter_mut() {
+            t.drain(observer)?;
+        }
+        if !ctx.sleep(Duration::from_millis(2)) {
+            bail!("interrupted while starting {}", r.name);
+        }
+    }
+}
+
+fn stop_all(running: &mut [Running]) {
+    for r in running.iter_mut().rev() {
+        if r.poll() {
+            continue;
+        }
+        r.terminate();
+        let t0 = Instant::now();
+        while !r.poll() && t0.elapsed() < STOP_TIMEOUT {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        if !r.poll() {
+            tracing::warn!(process = %r.name, "did not stop within {STOP_TIMEOUT:?}; killing it");
+            r.kill();
+            let _ = r.child.wait().map(|s| r.status = Some(s));
+        }
+    }
+}
+
+fn summary(
+    manifest: &Manifest,
+    ns: &Namespace,
+    wall: Duration,
+    taps: &[Box<dyn Tap>],
+    obs: &Observer,
+    failures: &[String],
+    exit: LoopExit,
+) -> String {
+    let mission_s = manifest.run.duration_s;
+    let mut parts = vec![format!(
+        "nauta: run {ns} {} {:.1} s mission in {:.2} s wall ({:.1}x)",
+        manifest.clock().name(),
+        mission_s,
+        wall.as_secs_f64(),
+        mission_s / wall.as_secs_f64().max(1e-9)
+    )];
+    let mut gaps = 0;
+    for t in taps {
+        gaps += t.gaps();
+        let s = t.service();
+        if s.ends_with("/progress") || s.ends_with("/snapshot") || s.ends_with("/health") {
+            continue;
+        }
+        let rate = match t.span() {
+            Some((a, b)) if b > a && t.count() > 1 => {
+                (t.count() - 1) as f64 / ((b - a) as f64 * 1e-9)
+            }
+            _ => 0.0,
+        };
+        parts.push(format!("{s} {} msgs {:.1} Hz", t.count(), rate));
+    }
+    parts.push(format!("gaps {gaps}"));
+    match obs.rms_deg() {
+        Some([r, p, y, tot]) => parts.push(format!(
+            "attitude error rms roll {r:.3}° pitch {p:.3}° yaw {y:.3}° total {tot:.3}° max {:.3}° over {} samples",
+            obs.max_total_deg(),
+            obs.compared
+        )),
+        None => parts.push("attitude error: no estimate matched a truth sample".into()),
+    }
+    parts.push(format!("attitude digest {:016x}", obs.digest()));
+    if exit == LoopExit::Signal {
+        parts.push("stopped by signal".into());
+    }
+    if failures.is_empty() {
+        parts.push("all processes exited 0".into());
+    } else {
+        parts.push(format!("FAILED: {}", failures.join(", ")));
+    }
+    parts.join(" | ")
+}
