@@ -12,8 +12,8 @@ use nauta_messages::checked::{Imu, StampOrder};
 use nauta_messages::*;
 use nauta_runtime::process::{ProcessArgs, init_tracing};
 use nauta_runtime::{
-    Context, Describe, EventLoop, HealthReporter, LoopExit, OrderedMerge, PortDescription, Wake,
-    services,
+    Context, ControlServer, Describe, EventLoop, HealthReporter, LoopExit, OrderedMerge,
+    PortDescription, Wake, services,
 };
 
 mod core;
@@ -98,6 +98,8 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         ctx.publisher(&services::snapshot::<AttitudeSnapshot>(Role::Attitude))?;
     let mut progress_out = ctx.publisher(&services::progress(Role::Attitude))?;
     let mut health = HealthReporter::new(ctx)?;
+    let (mut control, control_inbox) = ControlServer::open(ctx)?;
+    let mut stop = false;
     let span = tracing::info_span!("attitude", process = %ctx.process, variant = %ctx.variant);
     let _e = span.enter();
     ctx.ready();
@@ -109,24 +111,47 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     let mut order = StampOrder::default();
     let mut last_stamp = 0u64;
 
-    let exit =
-        EventLoop::new(Duration::from_secs(1)).run(&[&imu_inbox, &progress_inbox], |wake| {
+    let exit = EventLoop::new(Duration::from_secs(1)).run(
+        &[&imu_inbox, &progress_inbox, &control_inbox],
+        |wake| {
+            let mut snapshot_now = wake == Wake::Tick;
+            control.serve(|req| {
+                let status = match req.command {
+                    command::SNAPSHOT_NOW => {
+                        snapshot_now = true;
+                        0
+                    }
+                    command::STOP => {
+                        stop = true;
+                        0
+                    }
+                    // Standby and switching arrive with the launcher's hot swap.
+                    _ => 2,
+                };
+                ControlResponse {
+                    header: Header::new(last_stamp, 0, Role::Attitude, ctx.instance),
+                    status,
+                    state: if stop { state::DRAINING } else { health.state },
+                    last_stamp_ns: last_stamp,
+                }
+            })?;
+            if snapshot_now && let Some(s) = core.snapshot() {
+                snapshot_out.publish_now(AttitudeSnapshot {
+                    header: Header::new(last_stamp, 0, Role::Attitude, ctx.instance),
+                    quat_nb: s.q,
+                    gyro_bias_rad_s: s.gyro_bias,
+                    covariance: s.covariance,
+                    calibration: s.calibration,
+                    pad: 0,
+                })?;
+            }
             if wake == Wake::Tick {
                 health.dropped = imu_in.gaps().missing + estimate_out.given_up();
                 health.publish(ctx);
-                if let Some(s) = core.snapshot() {
-                    let msg = AttitudeSnapshot {
-                        header: Header::new(last_stamp, 0, Role::Attitude, ctx.instance),
-                        quat_nb: s.q,
-                        gyro_bias_rad_s: s.gyro_bias,
-                        covariance: s.covariance,
-                        calibration: s.calibration,
-                        pad: 0,
-                    };
-                    snapshot_out.publish_now(msg)?;
-                }
                 ctx.cleanup_dead_nodes();
-                return Ok(ControlFlow::Continue(()));
+                if !stop {
+                    return Ok(ControlFlow::Continue(()));
+                }
             }
             // Progress first: an end-of-stream seen here means every IMU sample sent
             // before it is already in the IMU queue, drained just below.
@@ -153,7 +178,7 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                     Err(e) => health.reject(imu_service, &e),
                 }
             })?;
-            if ended {
+            if ended || stop {
                 merge.end(IMU);
             }
             while let Some((_, stamp, imu)) = merge.pop() {
@@ -187,7 +212,8 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                 return Ok(ControlFlow::Break(()));
             }
             Ok(ControlFlow::Continue(()))
-        })?;
+        },
+    )?;
     health.state = state::STOPPED;
     health.dropped = imu_in.gaps().missing + estimate_out.given_up();
     health.publish(ctx);

@@ -9,7 +9,9 @@ use anyhow::Context as _;
 use clap::Parser;
 use nauta_messages::*;
 use nauta_runtime::process::{ProcessArgs, init_tracing};
-use nauta_runtime::{Context, Describe, HealthReporter, Pacer, PortDescription, services};
+use nauta_runtime::{
+    Context, ControlServer, Describe, HealthReporter, Pacer, PortDescription, services,
+};
 
 mod scripted;
 
@@ -92,6 +94,8 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     let mut progress = ctx.publisher(&services::progress(Role::Sensor))?;
     let mut health = HealthReporter::new(ctx)?;
     let mut pacer = Pacer::new(ctx.clock);
+    // Requests are polled once per batch (a source never blocks on inputs).
+    let (mut control, _control_inbox) = ControlServer::open(ctx)?;
     ctx.ready();
     health.state = state::RUNNING;
     let span = tracing::info_span!("sensor", process = %ctx.process, clock = ctx.clock.name());
@@ -143,7 +147,23 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
             truth.flush();
             imu.flush();
             depth.flush();
-            if ctx.termination_requested() {
+            let mut stop_requested = false;
+            control.serve(|req| {
+                let status = match req.command {
+                    command::STOP => {
+                        stop_requested = true;
+                        0
+                    }
+                    _ => 2,
+                };
+                ControlResponse {
+                    header: Header::new(last_stamp, 0, Role::Sensor, 0),
+                    status,
+                    state: state::RUNNING,
+                    last_stamp_ns: last_stamp,
+                }
+            })?;
+            if stop_requested || ctx.termination_requested() {
                 stopped = true;
                 break;
             }

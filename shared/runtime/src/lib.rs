@@ -9,6 +9,7 @@
 
 pub mod clock;
 pub mod context;
+pub mod control;
 pub mod describe;
 pub mod event_loop;
 pub mod health;
@@ -21,6 +22,7 @@ pub mod services;
 
 pub use clock::{ClockMode, Pacer};
 pub use context::Context;
+pub use control::{ControlClient, ControlServer};
 pub use describe::{Describe, PortDescription};
 pub use event_loop::{EventLoop, LoopExit, Wake};
 pub use health::HealthReporter;

@@ -1,0 +1,184 @@
+//! `<role>/control/<instance>`: the launcher's commands to one process
+//! (standby, activate, deactivate, snapshot-now, stop), over iceoryx2
+//! request-response, with a companion event so that a request wakes the
+//! process's [`crate::EventLoop`] at once.
+
+use std::time::{Duration, Instant};
+
+use iceoryx2::port::client::Client;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::server::Server;
+use nauta_messages::{ControlRequest, ControlResponse, Role, control_service};
+
+use crate::Ipc;
+use crate::context::{Context, service_name};
+use crate::ports::Inbox;
+use crate::services::{MAX_NODES, MAX_SUBSCRIBERS};
+
+/// The control service name of one process: `<role>/control/<instance>`.
+pub fn control_name(role: Role, instance: u32) -> String {
+    format!("{}/{instance}", control_service(role.name()))
+}
+
+type ReqRes = iceoryx2::service::port_factory::request_response::PortFactory<
+    Ipc,
+    ControlRequest,
+    (),
+    ControlResponse,
+    (),
+>;
+
+fn open(
+    ctx: &Context,
+    name: &str,
+) -> anyhow::Result<(
+    ReqRes,
+    iceoryx2::service::port_factory::event::PortFactory<Ipc>,
+)> {
+    let sn = service_name(name)?;
+    let rr = ctx
+        .node
+        .service_builder(&sn)
+        .request_response::<ControlRequest, ControlResponse>()
+        .max_servers(2)
+        .max_clients(4)
+        .max_nodes(MAX_NODES)
+        .open_or_create()
+        .map_err(|e| anyhow::anyhow!("cannot open control service {name}: {e:?}"))?;
+    let ev = ctx
+        .node
+        .service_builder(&sn)
+        .event()
+        .max_notifiers(4)
+        .max_listeners(MAX_SUBSCRIBERS)
+        .max_nodes(MAX_NODES)
+        .open_or_create()
+        .map_err(|e| anyhow::anyhow!("cannot open control event {name}: {e:?}"))?;
+    Ok((rr, ev))
+}
+
+/// The serving side, in the controlled process.
+pub struct ControlServer {
+    _service: ReqRes,
+    server: Server<Ipc, ControlRequest, (), ControlResponse, ()>,
+    name: String,
+}
+
+impl std::fmt::Debug for ControlServer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ControlServer")
+            .field("service", &self.name)
+            .finish()
+    }
+}
+
+impl ControlServer {
+    /// Opens this process's control service and the inbox that wakes on requests.
+    pub fn open(ctx: &Context) -> anyhow::Result<(Self, Inbox)> {
+        let name = control_name(ctx.role, ctx.instance);
+        let (rr, ev) = open(ctx, &name)?;
+        let server = rr
+            .server_builder()
+            .create()
+            .map_err(|e| anyhow::anyhow!("cannot serve {name}: {e:?}"))?;
+        let listener = ev
+            .listener_builder()
+            .create()
+            .map_err(|e| anyhow::anyhow!("cannot listen on {name}: {e:?}"))?;
+        Ok((
+            ControlServer {
+                _service: rr,
+                server,
+                name: name.clone(),
+            },
+            Inbox { listener, name },
+        ))
+    }
+
+    /// Answers every pending request with `handle`; returns how many.
+    pub fn serve(
+        &mut self,
+        mut handle: impl FnMut(&ControlRequest) -> ControlResponse,
+    ) -> anyhow::Result<usize> {
+        let mut n = 0;
+        while let Some(active) = self
+            .server
+            .receive()
+            .map_err(|e| anyhow::anyhow!("{}: {e:?}", self.name))?
+        {
+            let response = handle(active.payload());
+            if let Err(e) = active.send_copy(response) {
+                tracing::warn!(service = %self.name, error = ?e, "control response not sent");
+            }
+            n += 1;
+        }
+        Ok(n)
+    }
+}
+
+/// The commanding side (the launcher, `nauta restart|swap|stop`).
+pub struct ControlClient {
+    _service: ReqRes,
+    client: Client<Ipc, ControlRequest, (), ControlResponse, ()>,
+    notifier: Notifier<Ipc>,
+    name: String,
+}
+
+impl std::fmt::Debug for ControlClient {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ControlClient")
+            .field("service", &self.name)
+            .finish()
+    }
+}
+
+impl ControlClient {
+    /// Opens the control service of process `role`/`instance`.
+    pub fn open(ctx: &Context, role: Role, instance: u32) -> anyhow::Result<Self> {
+        let name = control_name(role, instance);
+        let (rr, ev) = open(ctx, &name)?;
+        let client = rr
+            .client_builder()
+            .create()
+            .map_err(|e| anyhow::anyhow!("cannot create a client on {name}: {e:?}"))?;
+        let notifier = ev
+            .notifier_builder()
+            .create()
+            .map_err(|e| anyhow::anyhow!("cannot notify {name}: {e:?}"))?;
+        Ok(ControlClient {
+            _service: rr,
+            client,
+            notifier,
+            name,
+        })
+    }
+
+    /// Sends `request` and waits up to `timeout` for the answer.
+    pub fn request(
+        &self,
+        ctx: &Context,
+        request: ControlRequest,
+        timeout: Duration,
+    ) -> anyhow::Result<ControlResponse> {
+        let pending = self
+            .client
+            .send_copy(request)
+            .map_err(|e| anyhow::anyhow!("{}: request not sent: {e:?}", self.name))?;
+        let _ = self.notifier.notify();
+        let t0 = Instant::now();
+        loop {
+            if let Some(r) = pending
+                .receive()
+                .map_err(|e| anyhow::anyhow!("{}: {e:?}", self.name))?
+            {
+                return Ok(*r.payload());
+            }
+            anyhow::ensure!(
+                t0.elapsed() < timeout,
+                "{}: no answer within {timeout:?}",
+                self.name
+            );
+            anyhow::ensure!(ctx.sleep(Duration::from_millis(1)), "interrupted");
+        }
+    }
+}
