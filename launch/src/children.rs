@@ -73,6 +73,8 @@ pub struct Launch<'a> {
     pub instance: u32,
     /// Variant, if any.
     pub variant: Option<&'a str>,
+    /// Start in standby (a source waits for ACTIVATE).
+    pub standby: bool,
     /// Extra arguments from the manifest.
     pub args: &'a [String],
 }
@@ -87,6 +89,9 @@ pub fn spawn(l: &Launch<'_>) -> anyhow::Result<Running> {
         .args(["--instance", &l.instance.to_string()]);
     if let Some(v) = l.variant {
         cmd.args(["--variant", v]);
+    }
+    if l.standby {
+        cmd.arg("--standby");
     }
     cmd.args(l.args).stdin(Stdio::null()).process_group(0);
     // SAFETY: prctl is async-signal-safe and touches only the calling (child) process.

@@ -8,7 +8,9 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, bail};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
-use nauta_runtime::{Context, Describe, EventLoop, LoopExit, Manifest, Namespace, Wake, services};
+use nauta_runtime::{
+    Context, ControlClient, Describe, EventLoop, LoopExit, Manifest, Namespace, Wake, services,
+};
 
 use crate::children::{self, Launch, Running};
 use crate::monitor::{self, Observer, Tap};
@@ -130,7 +132,8 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     let ctx = Context::new(&namespace, settings)?;
     let (mut events, events_inbox) = ctx.subscriber(&services::run_events())?;
 
-    // Taps on every output, opened before any process starts so nothing is missed.
+    // Taps on every output and on each process's health, opened before any
+    // process starts so nothing is missed.
     let mut taps: Vec<Box<dyn Tap>> = Vec::new();
     let mut inboxes: Vec<Inbox> = Vec::new();
     let mut seen = std::collections::BTreeSet::new();
@@ -142,14 +145,24 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
                 inboxes.push(i);
             }
         }
+        let health = services::health(Role::from_name(&p.describe.role).unwrap_or(Role::Unknown));
+        if seen.insert(health.name.clone()) {
+            let (t, i) = monitor::tap(&ctx, &health.name, health.type_name())?;
+            taps.push(t);
+            inboxes.push(i);
+        }
     }
 
-    // Consumers first, sources (no inputs) last, each after the previous is ready.
+    // Every process opens its ports and reports ready once its inputs are
+    // connected to their publishers. Sources start in standby (they publish
+    // nothing yet), so they go first: their publishers are what consumers wait
+    // for. Once all are ready and the launcher's own taps are connected, the
+    // sources are activated: nothing is published before everyone listens.
     let mut order: Vec<&Proc> = procs
         .iter()
-        .filter(|p| !p.describe.inputs.is_empty())
+        .filter(|p| p.describe.inputs.is_empty())
         .collect();
-    order.extend(procs.iter().filter(|p| p.describe.inputs.is_empty()));
+    order.extend(procs.iter().filter(|p| !p.describe.inputs.is_empty()));
     let started = Instant::now();
     let mut running: Vec<Running> = Vec::new();
     let mut observer = Observer::default();
@@ -159,23 +172,30 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
         manifest.run.duration_s,
         manifest.run.seed
     );
-    for p in &order {
-        let section = manifest.process(&p.name)?;
-        let mut r = children::spawn(&Launch {
-            bin: &p.bin,
-            name: &p.name,
-            manifest: &manifest_file,
-            namespace: namespace.as_str(),
-            instance: 0,
-            variant: section.variant.as_deref(),
-            args: &section.args,
-        })?;
-        if let Err(e) = wait_ready(&ctx, &mut events, &mut r, &mut taps, &mut observer) {
-            running.push(r);
-            stop_all(&mut running);
-            return Err(e);
+    let startup = (|| -> anyhow::Result<()> {
+        for p in &order {
+            let section = manifest.process(&p.name)?;
+            running.push(children::spawn(&Launch {
+                bin: &p.bin,
+                name: &p.name,
+                manifest: &manifest_file,
+                namespace: namespace.as_str(),
+                instance: 0,
+                variant: section.variant.as_deref(),
+                standby: p.describe.inputs.is_empty(),
+                args: &section.args,
+            })?);
         }
-        running.push(r);
+        wait_all_ready(&ctx, &mut events, &mut running)?;
+        connect_taps(&ctx, &taps)?;
+        for p in order.iter().filter(|p| p.describe.inputs.is_empty()) {
+            activate(&ctx, p)?;
+        }
+        Ok(())
+    })();
+    if let Err(e) = startup {
+        stop_all(&mut running);
+        return Err(e);
     }
 
     let exit = {
@@ -283,44 +303,82 @@ fn check_wiring(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn wait_ready(
+fn wait_all_ready(
     ctx: &Context,
     events: &mut nauta_runtime::Subscriber<RunEvent>,
-    r: &mut Running,
-    taps: &mut [Box<dyn Tap>],
-    observer: &mut Observer,
+    running: &mut [Running],
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
+    let mut ready = std::collections::BTreeSet::new();
     loop {
-        let mut ready = false;
         events.drain(|e| {
-            if e.kind == event_kind::READY && fixed_str(&e.process) == r.name {
-                ready = true;
+            if e.kind == event_kind::READY {
+                ready.insert(fixed_str(&e.process));
             }
         })?;
-        if ready {
+        if running.iter().all(|r| ready.contains(&r.name)) {
             return Ok(());
         }
-        if r.poll() {
-            bail!(
-                "process {} exited before it was ready (exit {:?})",
-                r.name,
-                r.code()
-            );
+        for r in running.iter_mut() {
+            if r.poll() {
+                bail!(
+                    "process {} exited before it was ready (exit {:?})",
+                    r.name,
+                    r.code()
+                );
+            }
         }
         if t0.elapsed() > READY_TIMEOUT {
-            bail!(
-                "process {} did not report ready within {READY_TIMEOUT:?}",
-                r.name
-            );
-        }
-        for t in taps.iter_mut() {
-            t.drain(observer)?;
+            let missing: Vec<&str> = running
+                .iter()
+                .filter(|r| !ready.contains(&r.name))
+                .map(|r| r.name.as_str())
+                .collect();
+            bail!("{missing:?} did not report ready within {READY_TIMEOUT:?}");
         }
         if !ctx.sleep(Duration::from_millis(2)) {
-            bail!("interrupted while starting {}", r.name);
+            bail!("interrupted while starting the run");
         }
     }
+}
+
+fn connect_taps(ctx: &Context, taps: &[Box<dyn Tap>]) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    loop {
+        let mut all = true;
+        for t in taps {
+            all &= t.connect()?;
+        }
+        if all {
+            return Ok(());
+        }
+        if t0.elapsed() > READY_TIMEOUT {
+            bail!("the launcher could not connect to every output within {READY_TIMEOUT:?}");
+        }
+        if !ctx.sleep(Duration::from_millis(2)) {
+            bail!("interrupted while starting the run");
+        }
+    }
+}
+
+fn activate(ctx: &Context, p: &Proc) -> anyhow::Result<()> {
+    let role = Role::from_name(&p.describe.role)
+        .with_context(|| format!("process {}: unknown role {:?}", p.name, p.describe.role))?;
+    let client = ControlClient::open(ctx, role, 0)?;
+    let req = ControlRequest {
+        header: Header::new(0, 0, Role::Launcher, 0),
+        command: command::ACTIVATE,
+        pad: 0,
+        boundary_stamp_ns: 0,
+    };
+    let resp = client.request(ctx, req, READY_TIMEOUT)?;
+    anyhow::ensure!(
+        resp.status == 0,
+        "process {} refused to activate (status {})",
+        p.name,
+        resp.status
+    );
+    Ok(())
 }
 
 fn stop_all(running: &mut [Running]) {
@@ -374,6 +432,8 @@ fn summary(
         parts.push(format!("{s} {} msgs {:.1} Hz", t.count(), rate));
     }
     parts.push(format!("gaps {gaps}"));
+    let (lost, rejected) = obs.process_losses();
+    parts.push(format!("lost in processes {lost}, rejected {rejected}"));
     match obs.rms_deg() {
         Some([r, p, y, tot]) => parts.push(format!(
             "attitude error rms roll {r:.3}° pitch {p:.3}° yaw {y:.3}° total {tot:.3}° max {:.3}° over {} samples",

@@ -9,7 +9,7 @@ use nauta_messages::checked::{Attitude, Truth};
 use nauta_messages::registry::{MessageVisitor, visit_by_name};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
-use nauta_runtime::{Context, OrderedMerge, Subscriber, services};
+use nauta_runtime::{Connect, Context, OrderedMerge, Subscriber, services};
 
 /// A type-erased subscriber.
 pub trait Tap {
@@ -23,6 +23,8 @@ pub trait Tap {
     fn gaps(&self) -> u64;
     /// First and last stamps seen, ns.
     fn span(&self) -> Option<(u64, u64)>;
+    /// Attaches to the publishers present now; false while there is none.
+    fn connect(&self) -> anyhow::Result<bool>;
 }
 
 struct TypedTap<M: Message> {
@@ -52,6 +54,9 @@ impl<M: Message> Tap for TypedTap<M> {
     }
     fn span(&self) -> Option<(u64, u64)> {
         self.span
+    }
+    fn connect(&self) -> anyhow::Result<bool> {
+        Connect::connect(&self.sub)
     }
 }
 
@@ -103,6 +108,7 @@ pub struct Observer {
     sum_sq: [f64; 4],
     max_total: f64,
     digest: u64,
+    health: std::collections::BTreeMap<String, (u64, u64)>,
 }
 
 const TRUTH: usize = 0;
@@ -117,6 +123,7 @@ impl Default for Observer {
             sum_sq: [0.0; 4],
             max_total: 0.0,
             digest: 0xcbf2_9ce4_8422_2325,
+            health: Default::default(),
         }
     }
 }
@@ -141,6 +148,9 @@ impl Observer {
                     Item::Attitude(Box::new(checked)),
                 );
             }
+        } else if let Some(h) = msg.downcast_ref::<Health>() {
+            self.health
+                .insert(service.to_owned(), (h.dropped, h.rejected));
         } else if let Some(p) = msg.downcast_ref::<Progress>()
             && p.header.is_end_of_stream()
         {
@@ -187,6 +197,13 @@ impl Observer {
     /// Largest total attitude error, degrees.
     pub fn max_total_deg(&self) -> f64 {
         self.max_total.to_degrees()
+    }
+
+    /// Messages lost and rejected inside the processes, from their last health.
+    pub fn process_losses(&self) -> (u64, u64) {
+        self.health
+            .values()
+            .fold((0, 0), |(l, r), (dl, dr)| (l + dl, r + dr))
     }
 
     /// FNV-1a digest of every attitude estimate's encoding, in order.

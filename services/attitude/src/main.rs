@@ -102,7 +102,10 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     let mut stop = false;
     let span = tracing::info_span!("attitude", process = %ctx.process, variant = %ctx.variant);
     let _e = span.enter();
-    ctx.ready();
+    if !ctx.connect_and_ready(&[&imu_in, &sensor_progress])? {
+        tracing::info!("stopped by a signal before the inputs appeared");
+        return Ok(());
+    }
     health.state = state::RUNNING;
 
     // One data input today; the merge is what makes a second one deterministic.

@@ -95,8 +95,12 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     let mut health = HealthReporter::new(ctx)?;
     let mut pacer = Pacer::new(ctx.clock);
     // Requests are polled once per batch (a source never blocks on inputs).
-    let (mut control, _control_inbox) = ControlServer::open(ctx)?;
+    let (mut control, control_inbox) = ControlServer::open(ctx)?;
+    drop(control_inbox);
     ctx.ready();
+    if ctx.standby && !hold_until_activated(ctx, &mut control, &mut health)? {
+        return Ok(());
+    }
     health.state = state::RUNNING;
     let span = tracing::info_span!("sensor", process = %ctx.process, clock = ctx.clock.name());
     let _e = span.enter();
@@ -201,6 +205,56 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         "done"
     );
     Ok(())
+}
+
+/// Started with `--standby`, a source opens its ports, reports ready and waits
+/// for the launcher's ACTIVATE, sent once every consumer has connected, so that
+/// nothing is published before anyone listens (DESIGN §5). False on STOP or a
+/// termination signal.
+fn hold_until_activated(
+    ctx: &Context,
+    control: &mut ControlServer,
+    health: &mut HealthReporter,
+) -> anyhow::Result<bool> {
+    health.state = state::STANDBY;
+    let mut last_health = Instant::now();
+    loop {
+        let mut decision = None;
+        control.serve(|req| {
+            let status = match req.command {
+                command::ACTIVATE => {
+                    decision = Some(true);
+                    0
+                }
+                command::STOP => {
+                    decision = Some(false);
+                    0
+                }
+                command::SNAPSHOT_NOW => 0,
+                _ => 2,
+            };
+            ControlResponse {
+                header: Header::new(0, 0, Role::Sensor, ctx.instance),
+                status,
+                state: if decision == Some(true) {
+                    state::RUNNING
+                } else {
+                    state::STANDBY
+                },
+                last_stamp_ns: 0,
+            }
+        })?;
+        if let Some(d) = decision {
+            return Ok(d);
+        }
+        if last_health.elapsed() >= Duration::from_secs(1) {
+            last_health = Instant::now();
+            health.publish(ctx);
+        }
+        if !ctx.sleep(Duration::from_millis(1)) {
+            return Ok(false);
+        }
+    }
 }
 
 fn quat(q: &nalgebra::UnitQuaternion<f64>) -> [f64; 4] {

@@ -17,7 +17,9 @@ use crate::Ipc;
 use crate::clock::ClockMode;
 use crate::manifest::Manifest;
 use crate::namespace::{CleanupReport, Namespace, cleanup_dead_nodes};
-use crate::ports::{DEFAULT_BACKPRESSURE_DEADLINE, GapCounter, Inbox, Publisher, Subscriber};
+use crate::ports::{
+    Connect, DEFAULT_BACKPRESSURE_DEADLINE, GapCounter, Inbox, Publisher, Subscriber,
+};
 use crate::process::ProcessArgs;
 use crate::services::{self, Delivery, MAX_NODES, MAX_SUBSCRIBERS, ServiceSpec};
 
@@ -309,7 +311,39 @@ impl Context {
         }
     }
 
-    /// Announces that this process has opened its ports and is ready.
+    /// Waits until every input has a publisher and is attached to it (see
+    /// [`Connect`]), then reports ready. Returns false if a termination signal
+    /// arrived first.
+    pub fn connect_and_ready(&mut self, inputs: &[&dyn Connect]) -> anyhow::Result<bool> {
+        let t0 = Instant::now();
+        let mut warned = false;
+        loop {
+            let mut all = true;
+            for i in inputs {
+                all &= i.connect()?;
+            }
+            if all {
+                break;
+            }
+            if !warned && t0.elapsed() > Duration::from_secs(5) {
+                let missing: Vec<&str> = inputs
+                    .iter()
+                    .filter(|i| !matches!(i.connect(), Ok(true)))
+                    .map(|i| i.service())
+                    .collect();
+                tracing::warn!(?missing, "still waiting for publishers");
+                warned = true;
+            }
+            if !self.sleep(Duration::from_millis(1)) {
+                return Ok(false);
+            }
+        }
+        self.ready();
+        Ok(true)
+    }
+
+    /// Announces that this process has opened its ports (and connected its
+    /// inputs) and is ready.
     pub fn ready(&mut self) {
         self.announce(event_kind::READY, 0, 0);
         tracing::info!(process = %self.process, variant = %self.variant, "ready");

@@ -29,7 +29,7 @@ pub use health::HealthReporter;
 pub use manifest::Manifest;
 pub use merge::OrderedMerge;
 pub use namespace::Namespace;
-pub use ports::{Inbox, Publisher, Subscriber};
+pub use ports::{Connect, Inbox, Publisher, Subscriber};
 pub use process::ProcessArgs;
 pub use services::ServiceSpec;
 

@@ -265,6 +265,38 @@ impl<M: Message> Subscriber<M> {
     }
 }
 
+/// An input that can attach itself to the publishers that exist now.
+///
+/// iceoryx2 links a subscriber to a publisher lazily: until the subscriber side
+/// has attached (`update_connections`, done implicitly by `receive`), a sender
+/// treats the link as unconnected and, once the queue is full, drops samples
+/// for it without back-pressure. A consumer therefore connects every input to
+/// its publishers before it reports ready, and a source publishes only after
+/// every consumer is ready (DESIGN §5).
+pub trait Connect {
+    /// Service name.
+    fn service(&self) -> &str;
+    /// Attaches to every publisher present now; false while there is none.
+    fn connect(&self) -> anyhow::Result<bool>;
+}
+
+impl<M: Message> Connect for Subscriber<M> {
+    fn service(&self) -> &str {
+        &self.name
+    }
+
+    fn connect(&self) -> anyhow::Result<bool> {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        if self.publisher_count() == 0 {
+            return Ok(false);
+        }
+        self.inner.update_connections().map_err(|e| {
+            anyhow::anyhow!("cannot connect {} to its publishers: {e:?}", self.name)
+        })?;
+        Ok(true)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,436 @@
+//! End-to-end tests of the first slice (sensor → attitude, launched by `nauta
+//! launch`): real processes exchanging messages over iceoryx2 shared memory.
+//!
+//! Every test runs in its own namespace, under a watchdog; none asserts on wall
+//! time. Tests that need a killed process's leftovers to stay put close the
+//! launch gate (see `nauta_tests::Gate`), because every `nauta launch` removes
+//! the leftovers of dead processes of every run on the machine when it starts.
+
+use std::os::unix::process::ExitStatusExt;
+use std::time::Duration;
+
+use nauta_messages::{Header, ImuSample, Role};
+use nauta_runtime::{Namespace, services};
+use nauta_tests::*;
+
+/// Bound of a test that only runs launches.
+const BOUND: Duration = Duration::from_secs(180);
+/// Bound of a test that may wait for every other test's launches (closed gate).
+const GATED_BOUND: Duration = Duration::from_secs(300);
+
+/// Checks a completed sim run: exit 0, its namespace, `imu` IMU messages, no
+/// gap, one estimate per IMU sample after the alignment, every process exited 0.
+fn assert_complete_run(out: &Finished, ns: &Namespace, imu: u64) -> Summary {
+    assert_eq!(out.code(), Some(0), "nauta launch failed\n{out}");
+    let s = out.summary();
+    assert_eq!(
+        s.namespace(),
+        Some(ns.as_str()),
+        "summary of another run?\n{out}"
+    );
+    assert_eq!(s.count("sensor/imu"), Some(imu), "IMU count\n{out}");
+    assert_eq!(s.gaps(), Some(0), "sequence gaps\n{out}");
+    let align = alignment_samples(&survey_manifest());
+    assert!((1..=imu).contains(&align), "alignment_samples {align}");
+    assert_eq!(
+        s.count("attitude/estimate"),
+        Some(imu - (align - 1)),
+        "attitude estimates: one per IMU sample from the end of the alignment ({align} samples); \
+         IMU gaps reported by nauta-attitude itself: {:?}\n{out}",
+        attitude_input_gaps(&out.stderr)
+    );
+    assert!(
+        s.line.contains("all processes exited 0"),
+        "a process failed\n{out}"
+    );
+    assert!(s.digest().is_some(), "no attitude digest\n{out}");
+    s
+}
+
+/// The IMU gaps nauta-attitude logs when it ends (`attitude: done ... gaps=N`),
+/// for diagnostics: the summary's `gaps` counts only the launcher's own taps.
+fn attitude_input_gaps(stderr: &str) -> Option<u64> {
+    let plain = strip_ansi(stderr);
+    plain
+        .lines()
+        .filter(|l| l.contains("attitude") && l.contains(" done "))
+        .find_map(|l| {
+            l.split_whitespace()
+                .find_map(|w| w.strip_prefix("gaps=")?.parse().ok())
+        })
+}
+
+fn strip_ansi(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut chars = s.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            // CSI: ESC [ ... final byte in @..~
+            for d in chars.by_ref() {
+                if ('@'..='~').contains(&d) && d != '[' {
+                    break;
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+fn digest(s: &Summary) -> String {
+    s.digest().unwrap_or_default()
+}
+
+/// Criterion 1: Two processes exchange 100,000 IMU messages in sim mode with no sequence gap.
+#[test]
+fn sim_run_moves_100k_imu_messages_without_gap() {
+    bin_dir();
+    let wd = Watchdog::new("sim_run_moves_100k_imu_messages_without_gap", BOUND);
+    let ns = Namespace::unique();
+    let out = launch(
+        &wd,
+        &["--fast", "--duration", "1000", "--namespace", ns.as_str()],
+    );
+    assert_complete_run(&out, &ns, 100_000);
+}
+
+/// Criterion 2: Two runs in different namespaces side by side do not see each other.
+#[test]
+fn side_by_side_runs_are_isolated() {
+    bin_dir();
+    let wd = Watchdog::new("side_by_side_runs_are_isolated", BOUND);
+    let (seed_a, seed_b) = ("21", "22");
+    let (ns_a, ns_b) = (Namespace::unique(), Namespace::unique());
+    let args = |ns: &Namespace, seed: &'static str| -> Vec<String> {
+        [
+            "--fast",
+            "--duration",
+            "120",
+            "--seed",
+            seed,
+            "--namespace",
+            ns.as_str(),
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let a_args = args(&ns_a, seed_a);
+    let b_args = args(&ns_b, seed_b);
+    let a = start_launch(&wd, &a_args.iter().map(String::as_str).collect::<Vec<_>>());
+    let b = start_launch(&wd, &b_args.iter().map(String::as_str).collect::<Vec<_>>());
+    let a = a.wait(&wd);
+    let b = b.wait(&wd);
+    let sa = assert_complete_run(&a, &ns_a, 12_000);
+    let sb = assert_complete_run(&b, &ns_b, 12_000);
+    assert_ne!(
+        digest(&sa),
+        digest(&sb),
+        "different seeds gave the same attitude digest\n{a}\n{b}"
+    );
+
+    // Each equals a run alone with the same seed.
+    for (seed, side_by_side) in [(seed_a, &sa), (seed_b, &sb)] {
+        let ns = Namespace::unique();
+        let solo_args = args(&ns, seed);
+        let solo = launch(
+            &wd,
+            &solo_args.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        let s = assert_complete_run(&solo, &ns, 12_000);
+        assert_eq!(
+            digest(&s),
+            digest(side_by_side),
+            "seed {seed}: the run side by side differs from the run alone\nside by side: {}\n{solo}",
+            side_by_side.line
+        );
+    }
+}
+
+/// Criterion 3: A run stopped with SIGTERM leaves no file of its run in /dev/shm.
+#[test]
+fn sigterm_leaves_no_shared_memory() {
+    bin_dir();
+    let wd = Watchdog::new("sigterm_leaves_no_shared_memory", BOUND);
+    let ns = Namespace::unique();
+    // Joins the run only to see its processes report ready; leaves before the stop.
+    let mut watch = EventWatch::new(&ns, Duration::from_millis(500));
+    let mut run = start_launch(
+        &wd,
+        &[
+            "--clock",
+            "wall",
+            "--duration",
+            "3600",
+            "--namespace",
+            ns.as_str(),
+        ],
+    );
+    // The launcher starts the attitude, then the sensor, each after the previous is ready.
+    for p in ["attitude", "sensor"] {
+        if !watch.wait_ready(&wd, p, &mut run) {
+            panic!(
+                "the launcher exited before {p} was ready\n{}",
+                run.wait(&wd)
+            );
+        }
+    }
+    drop(watch);
+    assert!(
+        !ns.shm_files().is_empty(),
+        "a running run has no file with prefix {} in /dev/shm",
+        ns.prefix()
+    );
+    // Let the launcher go from starting processes to running them (a signal while
+    // starting is an error, not a stop).
+    std::thread::sleep(Duration::from_millis(1000));
+    assert!(
+        run.is_running(),
+        "the launcher exited on its own\n{}",
+        run.wait(&wd)
+    );
+
+    run.signal(libc::SIGTERM);
+    let out = run.wait(&wd);
+    assert_eq!(
+        out.code(),
+        Some(130),
+        "nauta launch stopped by SIGTERM should exit 130\n{out}"
+    );
+
+    // Processes may finish removing their files just after they exit.
+    let gone = wait_until(&wd, Duration::from_secs(10), || ns.shm_files().is_empty());
+    let config = ns.config().expect("config");
+    assert!(
+        gone,
+        "files of run {ns} left in /dev/shm after SIGTERM: {:?}\n(all files of the run: {:?})\n{out}",
+        ns.shm_files(),
+        ns.all_files(&config)
+    );
+}
+
+/// Criterion 4: The leftovers of a process killed with -9 are removed by the next start.
+#[test]
+fn next_launch_removes_leftovers_of_kill_9() {
+    bin_dir();
+    let wd = Watchdog::new("next_launch_removes_leftovers_of_kill_9", GATED_BOUND);
+    let ns = Namespace::unique();
+    let config = ns.config().expect("config");
+    let manifest = survey_manifest();
+    let mut watch = EventWatch::new(&ns, Duration::from_millis(500));
+    // The attitude reports ready once its inputs have publishers: stand in for the sensor.
+    let inputs = (
+        watch
+            .ctx
+            .publisher(&services::imu())
+            .expect("IMU publisher"),
+        watch
+            .ctx
+            .publisher(&services::progress(Role::Sensor))
+            .expect("progress publisher"),
+    );
+    let mut attitude = Running::spawn(
+        &wd,
+        &bin("nauta-attitude"),
+        &[
+            "--manifest",
+            &manifest.display().to_string(),
+            "--process",
+            "attitude",
+            "--namespace",
+            ns.as_str(),
+            "--instance",
+            "0",
+        ],
+        None,
+    );
+    if !watch.wait_ready(&wd, "attitude", &mut attitude) {
+        panic!(
+            "nauta-attitude exited before it was ready\n{}",
+            attitude.wait(&wd)
+        );
+    }
+    drop(inputs);
+    drop(watch);
+    assert!(
+        !ns.shm_files().is_empty(),
+        "nauta-attitude is ready but has no file with prefix {} in /dev/shm",
+        ns.prefix()
+    );
+
+    // No launch of this test process may clean up until this test's own launch.
+    let _closed = Gate::close();
+    attitude.signal(libc::SIGKILL);
+    let killed = attitude.wait(&wd);
+    assert_eq!(killed.status.signal(), Some(libc::SIGKILL), "{killed}");
+    let left = ns.all_files(&config);
+    assert!(
+        !ns.shm_files().is_empty(),
+        "kill -9 left no file in /dev/shm, nothing to test (all files: {left:?})"
+    );
+
+    let other = Namespace::unique();
+    let out = start_launch_with(
+        &wd,
+        &["--fast", "--duration", "1", "--namespace", other.as_str()],
+        None,
+    )
+    .wait(&wd);
+    assert_eq!(out.code(), Some(0), "nauta launch failed\n{out}");
+    let remaining = ns.all_files(&config);
+    assert!(
+        remaining.is_empty(),
+        "files of the killed process's run {ns} remain after the next launch: {remaining:?}\n\
+         (left by kill -9: {left:?})\n{out}"
+    );
+}
+
+/// Criterion 5: A back-pressured publisher whose subscriber was killed with -9 is free
+/// again within its deadline.
+#[test]
+fn publisher_is_freed_from_a_subscriber_killed_with_9() {
+    bin_dir();
+    let wd = Watchdog::new(
+        "publisher_is_freed_from_a_subscriber_killed_with_9",
+        GATED_BOUND,
+    );
+    let ns = Namespace::unique();
+    let manifest = survey_manifest();
+    let deadline = Duration::from_millis(500);
+    let mut watch = EventWatch::new(&ns, deadline);
+    let mut imu = watch
+        .ctx
+        .publisher(&services::imu())
+        .unwrap_or_else(|e| panic!("IMU publisher: {e:#}"));
+    // The attitude's other input, so that it connects and reports ready.
+    let _progress = watch
+        .ctx
+        .publisher(&services::progress(Role::Sensor))
+        .unwrap_or_else(|e| panic!("progress publisher: {e:#}"));
+    let mut attitude = Running::spawn(
+        &wd,
+        &bin("nauta-attitude"),
+        &[
+            "--manifest",
+            &manifest.display().to_string(),
+            "--process",
+            "attitude",
+            "--namespace",
+            ns.as_str(),
+            "--instance",
+            "0",
+        ],
+        None,
+    );
+    if !watch.wait_ready(&wd, "attitude", &mut attitude) {
+        panic!(
+            "nauta-attitude exited before it was ready\n{}",
+            attitude.wait(&wd)
+        );
+    }
+    let subscribed = wait_until(&wd, Duration::from_secs(30), || imu.subscriber_count() >= 1);
+    assert!(
+        subscribed,
+        "nauta-attitude is ready but does not subscribe to sensor/imu"
+    );
+
+    // No launch of this test process may remove the dead subscriber meanwhile.
+    let _closed = Gate::close();
+    attitude.signal(libc::SIGKILL);
+    let killed = attitude.wait(&wd);
+    assert_eq!(killed.status.signal(), Some(libc::SIGKILL), "{killed}");
+
+    // The dead subscriber's queue fills, the publisher blocks until its deadline,
+    // gives that delivery up, removes the dead node and is free again. A hang
+    // here is caught by this watchdog (it aborts the test process).
+    let publishing = Watchdog::new("publishing to a dead subscriber", Duration::from_secs(60));
+    const N: u64 = 2_000;
+    for k in 0..N {
+        let msg = ImuSample {
+            header: Header::new((k + 1) * 10_000_000, 0, Role::Test, 0),
+            gyro_rad_s: [1e-4, -2e-4, 5e-5],
+            accel_m_s2: [0.0, 0.0, -9.81],
+            mag_ut: [22.0, 0.5, 38.0],
+            interval_s: 0.01,
+        };
+        imu.publish(msg)
+            .unwrap_or_else(|e| panic!("publish #{k}: {e:#}"));
+        if (k + 1) % 32 == 0 {
+            imu.flush();
+        }
+    }
+    imu.flush();
+    publishing.check();
+    drop(publishing);
+    assert_eq!(imu.published(), N);
+    assert!(
+        imu.given_up() >= 1,
+        "no delivery was given up: the dead subscriber's queue cannot have taken {N} samples"
+    );
+    assert_eq!(
+        imu.subscriber_count(),
+        0,
+        "the dead subscriber is still attached after the publisher gave up ({} given up)",
+        imu.given_up()
+    );
+    assert!(watch.ctx.any_delivery_given_up());
+}
+
+/// Criterion 6: Two sim runs with the same seed give bit-identical attitude outputs; another
+/// seed differs.
+#[test]
+fn sim_runs_are_deterministic() {
+    bin_dir();
+    let wd = Watchdog::new("sim_runs_are_deterministic", BOUND);
+    let run = |seed: &str| {
+        let ns = Namespace::unique();
+        let out = launch(
+            &wd,
+            &[
+                "--fast",
+                "--duration",
+                "300",
+                "--seed",
+                seed,
+                "--namespace",
+                ns.as_str(),
+            ],
+        );
+        let s = assert_complete_run(&out, &ns, 30_000);
+        (digest(&s), out)
+    };
+    let (first, out1) = run("11");
+    let (second, out2) = run("11");
+    assert_eq!(
+        first, second,
+        "two runs with seed 11 differ\n{out1}\n{out2}"
+    );
+    let (third, out3) = run("12");
+    assert_ne!(
+        first, third,
+        "seeds 11 and 12 gave the same attitude digest\n{out1}\n{out3}"
+    );
+}
+
+/// The summary parser itself.
+#[test]
+fn summary_parsing() {
+    let line = "nauta: run r1-2-3 sim 60.0 s mission in 0.14 s wall (438.7x) | attitude/estimate 5801 msgs 100.0 Hz | sensor/imu 6000 msgs 100.0 Hz | sensor/depth 600 msgs 10.0 Hz | sim/truth 6000 msgs 100.0 Hz | gaps 0 | attitude error rms roll 0.140° over 5801 samples | attitude digest 6dd6335c7369c535 | all processes exited 0";
+    let s = Summary::find(&format!("noise\n{line}\n")).expect("summary");
+    assert_eq!(s.namespace(), Some("r1-2-3"));
+    assert_eq!(s.count("sensor/imu"), Some(6000));
+    assert_eq!(s.count("attitude/estimate"), Some(5801));
+    assert_eq!(s.count("sensor/dvl"), None);
+    assert_eq!(s.count("sensor"), None);
+    assert_eq!(s.gaps(), Some(0));
+    assert_eq!(s.digest().as_deref(), Some("6dd6335c7369c535"));
+    assert!(Summary::find("nauta: error: x").is_none());
+}
+
+/// The diagnostic parser of nauta-attitude's final log line.
+#[test]
+fn attitude_gaps_parsing() {
+    let log = "\u{1b}[2m2026-11-22T15:00:25.692639Z\u{1b}[0m \u{1b}[32m INFO\u{1b}[0m \u{1b}[1mattitude\u{1b}[0m: done \u{1b}[3minputs\u{1b}[0m\u{1b}[2m=\u{1b}[0m11383 \u{1b}[3mgaps\u{1b}[0m\u{1b}[2m=\u{1b}[0m617 \u{1b}[3mby_signal\u{1b}[0m\u{1b}[2m=\u{1b}[0mfalse\n";
+    assert_eq!(attitude_input_gaps(log), Some(617));
+    assert_eq!(attitude_input_gaps("nothing"), None);
+}
