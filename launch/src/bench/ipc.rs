@@ -2,14 +2,17 @@
 //! pipe and a Unix-domain socket (see BENCHMARKS.md, "IPC").
 //!
 //! The driver (`nauta bench ipc`) re-executes its own binary as
-//! `nauta __ipc-peer <case> ...` for every case and round; the peer is the sender,
-//! the driver the receiver that measures. Each iceoryx2 case runs in its own
+//! `nauta __ipc-peer <case> ...` for every round of every case; the peer is the
+//! sender, the driver the receiver that measures. Each iceoryx2 case runs in its own
 //! namespace (a unique `global.prefix`) that the peer gets on its command line.
-//! Cases of a comparison are interleaved round by round so that a slow phase of
-//! the (2-core, virtualised) machine hits both sides; latencies are pooled over
-//! the rounds, throughput is the median of the rounds.
 //!
-//! Nothing is pinned to a CPU.
+//! The machines are 2-core virtual machines whose wake-up latency and cross-core
+//! speed change with the host's state, so comparisons are made under the same
+//! conditions: the three wake-up mechanisms take turns message by message in one
+//! pair of processes, the other comparisons alternate round by round (which side
+//! goes first alternates too). Latencies are pooled over the rounds, throughput is
+//! the median of the rounds. A round during which other work ran on the machine is
+//! repeated. Nothing is pinned to a CPU.
 
 mod common;
 mod latency;
@@ -17,10 +20,12 @@ mod services;
 mod throughput;
 
 use anyhow::bail;
+use nauta_runtime::Namespace;
 use serde_json::json;
 
-use common::{PeerCtx, Summary, median};
-use latency::{EventWait, Run, Wait};
+use common::{LoadProbe, PeerCtx, Summary, median};
+use latency::{Mechanism, Run, Touch, Wait};
+use throughput::Writes;
 
 /// Rounds and samples of one latency comparison.
 #[derive(Debug, Clone, Copy)]
@@ -32,22 +37,22 @@ struct Plan {
 const BUSY: Plan = Plan {
     rounds: 3,
     run: Run {
-        count: 30_000,
-        warmup: 5_000,
+        count: 200_000,
+        warmup: 20_000,
     },
 };
 const WAKEUP: Plan = Plan {
     rounds: 5,
     run: Run {
-        count: 4_000,
-        warmup: 500,
+        count: 2_000,
+        warmup: 200,
     },
 };
 const LARGE_BUSY: Plan = Plan {
     rounds: 3,
     run: Run {
-        count: 5_000,
-        warmup: 500,
+        count: 20_000,
+        warmup: 1_000,
     },
 };
 const LARGE_BLOCKING: Plan = Plan {
@@ -57,12 +62,17 @@ const LARGE_BLOCKING: Plan = Plan {
         warmup: 200,
     },
 };
+/// Messages per iceoryx2 throughput round (and per batched-socket context round).
 const THROUGHPUT_MESSAGES: u64 = 2_000_000;
 const THROUGHPUT_ROUNDS: usize = 3;
+/// Messages per round of the socket baseline, one write() per message: the same
+/// work as a publish (each message leaves the sender when it is published). Fewer
+/// than iceoryx2's only because the socket is slower; rates are compared.
+const UNBUFFERED_MESSAGES: u64 = 500_000;
 
 /// The wait the headline event figure uses (the faster of the two, measured; the
 /// other is reported alongside).
-const EVENT_WAIT: EventWait = EventWait::Listener;
+const EVENT_WAIT: Mechanism = Mechanism::Listener;
 
 const TARGET_BUSY_P50_NS: u64 = 1_000;
 const TARGET_EVENT_OVER_PIPE: f64 = 1.5;
@@ -77,11 +87,9 @@ struct Pooled {
 }
 
 impl Pooled {
-    fn add(&mut self, mut round: Vec<u64>) -> u64 {
-        let p50 = Summary::of(&mut round).p50;
-        self.round_p50.push(p50);
+    fn add(&mut self, mut round: Vec<u64>) {
+        self.round_p50.push(Summary::of(&mut round).p50);
         self.samples.extend_from_slice(&round);
-        p50
     }
 
     fn summary(&mut self) -> Summary {
@@ -89,12 +97,117 @@ impl Pooled {
     }
 }
 
-fn prefix(tag: &str, round: usize) -> String {
-    format!("nautabench{}_{tag}{round}_", std::process::id())
+/// The cases' namespace tags.
+const CASE_TAGS: [&str; 6] = ["busy", "wake", "tput", "lgb", "lge", "lgt"];
+
+/// The nauta namespace of one case of this run (its rounds run one after the
+/// other in it): `bench<pid>-<tag>`.
+fn namespace(tag: &str) -> anyhow::Result<Namespace> {
+    Ok(Namespace::new(&format!(
+        "bench{}-{tag}",
+        std::process::id()
+    ))?)
 }
 
-fn progress(what: &str, round: usize, rounds: usize, figure: String) {
-    eprintln!("[bench ipc] {what} round {}/{rounds}: {figure}", round + 1);
+/// The iceoryx2 prefix of one case's namespace.
+fn prefix(tag: &str) -> String {
+    namespace(tag).map_or_else(|_| format!("nauta_bench-{tag}_"), |ns| ns.prefix())
+}
+
+/// Removes what the cases left once their nodes are gone (iceoryx2 keeps a
+/// management file per namespace on purpose; see `Namespace::remove_if_unused`).
+fn remove_case_namespaces() {
+    for tag in CASE_TAGS {
+        if let Ok(ns) = namespace(tag)
+            && let Err(e) = ns.remove_if_unused()
+        {
+            eprintln!("nauta bench ipc: files of namespace {ns} not removed: {e:#}");
+        }
+    }
+}
+
+/// Runs rounds, pools their results and reports progress (with the background load
+/// of each round) on stderr. A round during which other work kept more than
+/// [`BUSY_MACHINE_CPUS`] busy is repeated (at most [`ROUND_RETRIES`] times): on a
+/// 2-core machine such a round measures the other work as much as the IPC.
+#[derive(Debug, Default)]
+struct RoundLog {
+    max_other_cpus: f64,
+    repeated: usize,
+    contended: usize,
+}
+
+/// Background load above which a round is repeated, in CPUs.
+const BUSY_MACHINE_CPUS: f64 = 0.2;
+/// How often a contended round is repeated before it is kept anyway.
+const ROUND_RETRIES: usize = 3;
+
+impl RoundLog {
+    fn measure<T>(
+        &mut self,
+        what: &str,
+        round: usize,
+        rounds: usize,
+        mut f: impl FnMut() -> anyhow::Result<T>,
+        show: impl Fn(&T) -> String,
+    ) -> anyhow::Result<T> {
+        let mut attempt = 0;
+        loop {
+            let probe = LoadProbe::start();
+            let v = f()?;
+            let load = probe.finish();
+            let busy = load.other_cpus - load.uncertainty_cpus > BUSY_MACHINE_CPUS;
+            let retry = busy && attempt < ROUND_RETRIES;
+            eprintln!(
+                "[bench ipc] {what} round {}/{rounds}: {} (other load {:.2}±{:.2} CPU{})",
+                round + 1,
+                show(&v),
+                load.other_cpus,
+                load.uncertainty_cpus,
+                if retry { ", repeating" } else { "" }
+            );
+            if retry {
+                attempt += 1;
+                self.repeated += 1;
+                continue;
+            }
+            if busy {
+                self.contended += 1;
+            }
+            self.max_other_cpus = self.max_other_cpus.max(load.other_cpus);
+            return Ok(v);
+        }
+    }
+
+    fn latency(
+        &mut self,
+        pooled: &mut Pooled,
+        what: &str,
+        round: usize,
+        rounds: usize,
+        f: impl FnMut() -> anyhow::Result<Vec<u64>>,
+    ) -> anyhow::Result<()> {
+        let mut v = self.measure(what, round, rounds, f, |v| {
+            let mut c = v.clone();
+            let s = Summary::of(&mut c);
+            format!("p50 {} ns, p99 {} ns", s.p50, s.p99)
+        })?;
+        pooled.add(std::mem::take(&mut v));
+        Ok(())
+    }
+
+    fn rate(
+        &mut self,
+        rates: &mut Vec<f64>,
+        what: &str,
+        round: usize,
+        rounds: usize,
+        f: impl FnMut() -> anyhow::Result<f64>,
+    ) -> anyhow::Result<()> {
+        let rate = self.measure(what, round, rounds, f, |r| format!("{r:.0} msg/s"))?;
+        rates.push(rate);
+        Ok(())
+    }
 }
 
 /// Runs the benchmark and prints the report (a table, or one JSON object with
@@ -103,104 +216,189 @@ pub fn run(json: bool) -> anyhow::Result<()> {
     if cfg!(debug_assertions) {
         eprintln!("[bench ipc] warning: this is a debug build; use --release for real figures");
     }
+    let result = measure(json);
+    remove_case_namespaces();
+    result
+}
 
-    let only = std::env::var("NAUTA_BENCH_IPC_ONLY").unwrap_or_default();
-    let want = |k: &str| only.is_empty() || only.split(',').any(|x| x == k);
+fn measure(json: bool) -> anyhow::Result<()> {
+    let mut log = RoundLog::default();
+
     // 1. Busy-poll, IMU.
     let mut busy = Pooled::default();
-    for r in 0..BUSY.rounds * usize::from(want("busy")) {
-        let p50 = busy.add(latency::busy(&prefix("busy", r), BUSY.run)?);
-        progress("busy-poll", r, BUSY.rounds, format!("p50 {p50} ns"));
+    for r in 0..BUSY.rounds {
+        log.latency(&mut busy, "busy-poll", r, BUSY.rounds, || {
+            latency::busy(&prefix("busy"), BUSY.run)
+        })?;
     }
 
-    // 2./3. Event vs pipe wake-up, interleaved, the order rotating every round.
+    // 2./3. Event vs pipe wake-up, interleaved message by message.
     let mut event_listener = Pooled::default();
     let mut event_waitset = Pooled::default();
     let mut pipe = Pooled::default();
-    for r in 0..WAKEUP.rounds * usize::from(want("wakeup")) {
-        for k in 0..3 {
-            match (k + r) % 3 {
-                0 => {
-                    let p50 = event_listener.add(latency::event(
-                        &prefix("evl", r),
-                        WAKEUP.run,
-                        EventWait::Listener,
-                    )?);
-                    progress("event (listener)", r, WAKEUP.rounds, format!("p50 {p50} ns"));
-                }
-                1 => {
-                    let p50 = event_waitset.add(latency::event(
-                        &prefix("evw", r),
-                        WAKEUP.run,
-                        EventWait::WaitSet,
-                    )?);
-                    progress("event (waitset)", r, WAKEUP.rounds, format!("p50 {p50} ns"));
-                }
-                _ => {
-                    let p50 = pipe.add(latency::pipe_wakeup(WAKEUP.run)?);
-                    progress("pipe", r, WAKEUP.rounds, format!("p50 {p50} ns"));
-                }
-            }
-        }
+    for r in 0..WAKEUP.rounds {
+        let [l, w, p] = log.measure(
+            "wake-up",
+            r,
+            WAKEUP.rounds,
+            || latency::wakeup(&prefix("wake"), WAKEUP.run),
+            |v| {
+                let p50 = |x: &Vec<u64>| Summary::of(&mut x.clone()).p50;
+                format!(
+                    "p50 listener {} ns, waitset {} ns, pipe {} ns",
+                    p50(&v[0]),
+                    p50(&v[1]),
+                    p50(&v[2])
+                )
+            },
+        )?;
+        event_listener.add(l);
+        event_waitset.add(w);
+        pipe.add(p);
     }
 
     // 4. Lossless throughput, alternating which goes first.
     let mut iox_rates = Vec::new();
     let mut uds_rates = Vec::new();
-    for r in 0..THROUGHPUT_ROUNDS * usize::from(want("tput")) {
+    for r in 0..THROUGHPUT_ROUNDS {
         for k in 0..2 {
             if (k + r) % 2 == 0 {
-                let rate = throughput::iceoryx2(&prefix("tput", r), THROUGHPUT_MESSAGES)?;
-                progress("throughput iceoryx2", r, THROUGHPUT_ROUNDS, format!("{rate:.0} msg/s"));
-                iox_rates.push(rate);
+                log.rate(
+                    &mut iox_rates,
+                    "throughput iceoryx2",
+                    r,
+                    THROUGHPUT_ROUNDS,
+                    || throughput::iceoryx2(&prefix("tput"), THROUGHPUT_MESSAGES),
+                )?;
             } else {
-                let rate = throughput::uds(THROUGHPUT_MESSAGES)?;
-                progress("throughput socket", r, THROUGHPUT_ROUNDS, format!("{rate:.0} msg/s"));
-                uds_rates.push(rate);
+                log.rate(
+                    &mut uds_rates,
+                    "throughput socket",
+                    r,
+                    THROUGHPUT_ROUNDS,
+                    || throughput::uds(UNBUFFERED_MESSAGES, Writes::PerMessage),
+                )?;
             }
         }
+    }
+
+    // For context: the socket batching ~560 messages per write() through a
+    // BufWriter. A batch is delivered only when the buffer fills, so this is not
+    // the same work as publishing each message at once; iceoryx2 could batch
+    // too (slices), which is not measured here.
+    let mut uds_buffered_rates = Vec::new();
+    for r in 0..THROUGHPUT_ROUNDS {
+        log.rate(
+            &mut uds_buffered_rates,
+            "throughput socket, buffered (batched) writes",
+            r,
+            THROUGHPUT_ROUNDS,
+            || throughput::uds(THROUGHPUT_MESSAGES, Writes::Buffered),
+        )?;
     }
 
     // 5. 64 KiB, busy-poll on both sides, then blocking on both sides.
     let mut large_iox = Pooled::default();
     let mut large_uds = Pooled::default();
-    for r in 0..LARGE_BUSY.rounds * usize::from(want("large")) {
+    for r in 0..LARGE_BUSY.rounds {
         for k in 0..2 {
             if (k + r) % 2 == 0 {
-                let p50 = large_iox.add(latency::large_iceoryx2(
-                    &prefix("lgb", r),
-                    LARGE_BUSY.run,
-                    Wait::Busy,
-                )?);
-                progress("64 KiB iceoryx2 busy", r, LARGE_BUSY.rounds, format!("p50 {p50} ns"));
+                log.latency(
+                    &mut large_iox,
+                    "64 KiB iceoryx2 busy",
+                    r,
+                    LARGE_BUSY.rounds,
+                    || {
+                        latency::large_iceoryx2(
+                            &prefix("lgb"),
+                            LARGE_BUSY.run,
+                            Wait::Busy,
+                            Touch::Transport,
+                        )
+                    },
+                )?;
             } else {
-                let p50 = large_uds.add(latency::large_uds(LARGE_BUSY.run, Wait::Busy)?);
-                progress("64 KiB socket busy", r, LARGE_BUSY.rounds, format!("p50 {p50} ns"));
+                log.latency(
+                    &mut large_uds,
+                    "64 KiB socket busy",
+                    r,
+                    LARGE_BUSY.rounds,
+                    || latency::large_uds(LARGE_BUSY.run, Wait::Busy, Touch::Transport),
+                )?;
             }
         }
     }
     let mut large_iox_blocking = Pooled::default();
     let mut large_uds_blocking = Pooled::default();
-    for r in 0..LARGE_BLOCKING.rounds * usize::from(want("largeb")) {
+    for r in 0..LARGE_BLOCKING.rounds {
         for k in 0..2 {
             if (k + r) % 2 == 0 {
-                let p50 = large_iox_blocking.add(latency::large_iceoryx2(
-                    &prefix("lge", r),
-                    LARGE_BLOCKING.run,
-                    Wait::Blocking,
-                )?);
-                progress("64 KiB iceoryx2 event", r, LARGE_BLOCKING.rounds, format!("p50 {p50} ns"));
+                log.latency(
+                    &mut large_iox_blocking,
+                    "64 KiB iceoryx2 event",
+                    r,
+                    LARGE_BLOCKING.rounds,
+                    || {
+                        latency::large_iceoryx2(
+                            &prefix("lge"),
+                            LARGE_BLOCKING.run,
+                            Wait::Blocking,
+                            Touch::Full,
+                        )
+                    },
+                )?;
             } else {
-                let p50 =
-                    large_uds_blocking.add(latency::large_uds(LARGE_BLOCKING.run, Wait::Blocking)?);
-                progress("64 KiB socket blocking", r, LARGE_BLOCKING.rounds, format!("p50 {p50} ns"));
+                log.latency(
+                    &mut large_uds_blocking,
+                    "64 KiB socket blocking",
+                    r,
+                    LARGE_BLOCKING.rounds,
+                    || latency::large_uds(LARGE_BLOCKING.run, Wait::Blocking, Touch::Full),
+                )?;
             }
         }
     }
+    let mut large_iox_full = Pooled::default();
+    let mut large_uds_full = Pooled::default();
+    for r in 0..LARGE_BUSY.rounds {
+        for k in 0..2 {
+            if (k + r) % 2 == 0 {
+                log.latency(
+                    &mut large_iox_full,
+                    "64 KiB iceoryx2 busy, fill + checksum timed",
+                    r,
+                    LARGE_BUSY.rounds,
+                    || {
+                        latency::large_iceoryx2(
+                            &prefix("lgt"),
+                            LARGE_BUSY.run,
+                            Wait::Busy,
+                            Touch::Full,
+                        )
+                    },
+                )?;
+            } else {
+                log.latency(
+                    &mut large_uds_full,
+                    "64 KiB socket busy, fill + checksum timed",
+                    r,
+                    LARGE_BUSY.rounds,
+                    || latency::large_uds(LARGE_BUSY.run, Wait::Busy, Touch::Full),
+                )?;
+            }
+        }
+    }
+    if log.contended > 0 {
+        eprintln!(
+            "[bench ipc] warning: {} rounds ran while other work kept up to {:.2} CPUs busy; \
+             on a 2-core machine that distorts the figures: rerun on a quiet machine",
+            log.contended, log.max_other_cpus
+        );
+    }
 
     let (event, event_other) = match EVENT_WAIT {
-        EventWait::Listener => (&mut event_listener, &mut event_waitset),
-        EventWait::WaitSet => (&mut event_waitset, &mut event_listener),
+        Mechanism::WaitSet => (&mut event_waitset, &mut event_listener),
+        _ => (&mut event_listener, &mut event_waitset),
     };
     let report = Report {
         busy: busy.summary(),
@@ -213,15 +411,22 @@ pub fn run(json: bool) -> anyhow::Result<()> {
         pipe_rounds: pipe.round_p50.clone(),
         iox_rate: median(iox_rates.clone()),
         uds_rate: median(uds_rates.clone()),
+        uds_buffered_rate: median(uds_buffered_rates.clone()),
         iox_rates,
         uds_rates,
+        uds_buffered_rates,
         large_iox: large_iox.summary(),
         large_iox_rounds: large_iox.round_p50.clone(),
         large_uds: large_uds.summary(),
         large_uds_rounds: large_uds.round_p50.clone(),
         large_iox_blocking: large_iox_blocking.summary(),
         large_uds_blocking: large_uds_blocking.summary(),
+        large_iox_full: large_iox_full.summary(),
+        large_uds_full: large_uds_full.summary(),
         machine: Machine::read(),
+        max_round_other_cpus: log.max_other_cpus,
+        repeated_rounds: log.repeated,
+        contended_rounds: log.contended,
     };
     if json {
         println!("{}", serde_json::to_string_pretty(&report.json())?);
@@ -283,32 +488,40 @@ struct Report {
     pipe_rounds: Vec<u64>,
     iox_rate: f64,
     uds_rate: f64,
+    uds_buffered_rate: f64,
     iox_rates: Vec<f64>,
     uds_rates: Vec<f64>,
+    uds_buffered_rates: Vec<f64>,
     large_iox: Summary,
     large_iox_rounds: Vec<u64>,
     large_uds: Summary,
     large_uds_rounds: Vec<u64>,
     large_iox_blocking: Summary,
     large_uds_blocking: Summary,
+    large_iox_full: Summary,
+    large_uds_full: Summary,
     machine: Machine,
+    max_round_other_cpus: f64,
+    repeated_rounds: usize,
+    contended_rounds: usize,
 }
 
 fn ratio(a: f64, b: f64) -> f64 {
     if b > 0.0 { a / b } else { f64::INFINITY }
 }
 
-fn wait_name(w: EventWait) -> &'static str {
+fn wait_name(w: Mechanism) -> &'static str {
     match w {
-        EventWait::Listener => "listener.timed_wait",
-        EventWait::WaitSet => "waitset",
+        Mechanism::Listener => "listener.timed_wait",
+        Mechanism::WaitSet => "waitset",
+        Mechanism::Pipe => "pipe read",
     }
 }
 
-fn other_wait(w: EventWait) -> EventWait {
+fn other_wait(w: Mechanism) -> Mechanism {
     match w {
-        EventWait::Listener => EventWait::WaitSet,
-        EventWait::WaitSet => EventWait::Listener,
+        Mechanism::WaitSet => Mechanism::Listener,
+        _ => Mechanism::WaitSet,
     }
 }
 
@@ -332,6 +545,13 @@ impl Report {
         )
     }
 
+    fn large_full_ratio(&self) -> f64 {
+        ratio(
+            self.large_uds_full.p50 as f64,
+            self.large_iox_full.p50 as f64,
+        )
+    }
+
     fn json(&self) -> serde_json::Value {
         // Built key by key: one json! literal this size exceeds the macro recursion limit.
         let mut o = serde_json::Map::new();
@@ -342,7 +562,10 @@ impl Report {
         put("busy_poll_p99_ns", json!(self.busy.p99));
         put("busy_poll_samples", json!(self.busy.n));
         put("busy_poll_target_p50_max_ns", json!(TARGET_BUSY_P50_NS));
-        put("busy_poll_target_met", json!(self.busy.p50 <= TARGET_BUSY_P50_NS));
+        put(
+            "busy_poll_target_met",
+            json!(self.busy.p50 <= TARGET_BUSY_P50_NS),
+        );
         put("event_p50_ns", json!(self.event.p50));
         put("event_p99_ns", json!(self.event.p99));
         put("event_samples", json!(self.event.n));
@@ -355,29 +578,70 @@ impl Report {
         put("pipe_wakeup_samples", json!(self.pipe.n));
         put("event_over_pipe_p50_ratio", json!(self.event_over_pipe()));
         put("event_over_pipe_target_max", json!(TARGET_EVENT_OVER_PIPE));
-        put("event_over_pipe_target_met", json!(self.event_over_pipe() <= TARGET_EVENT_OVER_PIPE));
+        put(
+            "event_over_pipe_target_met",
+            json!(self.event_over_pipe() <= TARGET_EVENT_OVER_PIPE),
+        );
         put("iceoryx2_msgs_per_s", json!(self.iox_rate));
         put("uds_msgs_per_s", json!(self.uds_rate));
+        put("uds_writes", json!("one write() per message"));
         put("throughput_messages", json!(THROUGHPUT_MESSAGES));
+        put("uds_messages", json!(UNBUFFERED_MESSAGES));
         put("throughput_rounds", json!(THROUGHPUT_ROUNDS));
-        put("iceoryx2_over_uds_throughput_ratio", json!(self.throughput_ratio()));
-        put("throughput_target_min_ratio", json!(TARGET_THROUGHPUT_RATIO));
-        put("throughput_target_met", json!(self.throughput_ratio() >= TARGET_THROUGHPUT_RATIO));
+        put(
+            "iceoryx2_over_uds_throughput_ratio",
+            json!(self.throughput_ratio()),
+        );
+        put(
+            "throughput_target_min_ratio",
+            json!(TARGET_THROUGHPUT_RATIO),
+        );
+        put(
+            "throughput_target_met",
+            json!(self.throughput_ratio() >= TARGET_THROUGHPUT_RATIO),
+        );
         put("large_wait", json!("busy-poll (both)"));
+        put(
+            "large_measures",
+            json!(
+                "stamp taken when the filled message is handed to the transport, read when the receiver holds it"
+            ),
+        );
         put("large_iceoryx2_p50_ns", json!(self.large_iox.p50));
         put("large_iceoryx2_p99_ns", json!(self.large_iox.p99));
         put("large_uds_p50_ns", json!(self.large_uds.p50));
         put("large_uds_p99_ns", json!(self.large_uds.p99));
         put("large_samples", json!(self.large_iox.n));
-        put("large_uds_over_iceoryx2_p50_ratio", json!(self.large_ratio()));
+        put(
+            "large_uds_over_iceoryx2_p50_ratio",
+            json!(self.large_ratio()),
+        );
         put("large_target_min_ratio", json!(TARGET_LARGE_RATIO));
-        put("large_target_met", json!(self.large_ratio() >= TARGET_LARGE_RATIO));
-        put("large_blocking_iceoryx2_p50_ns", json!(self.large_iox_blocking.p50));
-        put("large_blocking_iceoryx2_p99_ns", json!(self.large_iox_blocking.p99));
-        put("large_blocking_uds_p50_ns", json!(self.large_uds_blocking.p50));
-        put("large_blocking_uds_p99_ns", json!(self.large_uds_blocking.p99));
+        put(
+            "large_target_met",
+            json!(self.large_ratio() >= TARGET_LARGE_RATIO),
+        );
+        put(
+            "large_blocking_iceoryx2_p50_ns",
+            json!(self.large_iox_blocking.p50),
+        );
+        put(
+            "large_blocking_iceoryx2_p99_ns",
+            json!(self.large_iox_blocking.p99),
+        );
+        put(
+            "large_blocking_uds_p50_ns",
+            json!(self.large_uds_blocking.p50),
+        );
+        put(
+            "large_blocking_uds_p99_ns",
+            json!(self.large_uds_blocking.p99),
+        );
         put("large_blocking_samples", json!(self.large_iox_blocking.n));
-        put("large_blocking_uds_over_iceoryx2_p50_ratio", json!(self.large_blocking_ratio()));
+        put(
+            "large_blocking_uds_over_iceoryx2_p50_ratio",
+            json!(self.large_blocking_ratio()),
+        );
         put(
             "rounds",
             json!({
@@ -387,10 +651,37 @@ impl Report {
                 "pipe_wakeup_p50_ns": self.pipe_rounds,
                 "iceoryx2_msgs_per_s": self.iox_rates,
                 "uds_msgs_per_s": self.uds_rates,
+                "uds_buffered_msgs_per_s": self.uds_buffered_rates,
                 "large_iceoryx2_p50_ns": self.large_iox_rounds,
                 "large_uds_p50_ns": self.large_uds_rounds,
             }),
         );
+        put(
+            "large_full_path_iceoryx2_p50_ns",
+            json!(self.large_iox_full.p50),
+        );
+        put(
+            "large_full_path_iceoryx2_p99_ns",
+            json!(self.large_iox_full.p99),
+        );
+        put("large_full_path_uds_p50_ns", json!(self.large_uds_full.p50));
+        put("large_full_path_uds_p99_ns", json!(self.large_uds_full.p99));
+        put(
+            "large_full_path_uds_over_iceoryx2_p50_ratio",
+            json!(self.large_full_ratio()),
+        );
+        put("uds_buffered_msgs_per_s", json!(self.uds_buffered_rate));
+        put("uds_buffered_messages", json!(THROUGHPUT_MESSAGES));
+        put(
+            "iceoryx2_over_uds_buffered_throughput_ratio",
+            json!(ratio(self.iox_rate, self.uds_buffered_rate)),
+        );
+        put(
+            "background_load_max_round_cpus",
+            json!(self.max_round_other_cpus),
+        );
+        put("repeated_rounds", json!(self.repeated_rounds));
+        put("contended_rounds", json!(self.contended_rounds));
         put(
             "machine",
             json!({
@@ -410,13 +701,14 @@ impl Report {
             m.cpus, m.model, m.kernel
         );
         println!();
+        println!("One-way latency, ping-pong (the next message goes after the echo)");
         println!(
-            "One-way latency (ping-pong, unqueued)      {:>10} {:>10} {:>9}",
-            "p50", "p99", "samples"
+            "  {:<52}{:>13}{:>13}{:>10}",
+            "case", "p50", "p99", "samples"
         );
         let row = |name: &str, s: &Summary| {
             println!(
-                "  {name:<41}{:>7} ns {:>7} ns {:>9}",
+                "  {name:<52}{:>10} ns{:>10} ns{:>10}",
                 group(s.p50),
                 group(s.p99),
                 group(s.n as u64)
@@ -424,59 +716,96 @@ impl Report {
         };
         row("busy-poll, IMU, iceoryx2", &self.busy);
         row(
-            &format!("event wake-up, IMU, iceoryx2 ({})", wait_name(EVENT_WAIT)),
+            &format!("event wake-up, IMU, iceoryx2, {}", wait_name(EVENT_WAIT)),
             &self.event,
         );
         row(
-            &format!("  (same with {})", wait_name(other_wait(EVENT_WAIT))),
+            &format!(
+                "event wake-up, IMU, iceoryx2, {}",
+                wait_name(other_wait(EVENT_WAIT))
+            ),
             &self.event_other,
         );
-        row("pipe wake-up, 8-byte stamp", &self.pipe);
+        row("pipe wake-up, 8-byte stamp (kernel floor)", &self.pipe);
         row("64 KiB, iceoryx2, busy-poll", &self.large_iox);
         row("64 KiB, socket + bincode, busy-poll", &self.large_uds);
+        row(
+            "64 KiB, iceoryx2, busy, fill + checksum inside",
+            &self.large_iox_full,
+        );
+        row(
+            "64 KiB, socket + bincode, busy, fill + checksum inside",
+            &self.large_uds_full,
+        );
         row("64 KiB, iceoryx2, event", &self.large_iox_blocking);
-        row("64 KiB, socket + bincode, blocking read", &self.large_uds_blocking);
+        row(
+            "64 KiB, socket + bincode, blocking read",
+            &self.large_uds_blocking,
+        );
         println!();
         println!(
-            "Lossless throughput, IMU, {} messages, median of {} rounds",
-            group(THROUGHPUT_MESSAGES),
+            "Lossless throughput, IMU messages (median of {} rounds)",
             THROUGHPUT_ROUNDS
         );
-        println!(
-            "  iceoryx2 (back-pressure)                 {:>12} msg/s",
-            group(self.iox_rate as u64)
+        let rate = |name: &str, r: f64, n: u64| {
+            println!(
+                "  {name:<52}{:>13} msg/s  ({} messages)",
+                group(r as u64),
+                group(n)
+            );
+        };
+        rate(
+            "iceoryx2, back-pressure",
+            self.iox_rate,
+            THROUGHPUT_MESSAGES,
         );
-        println!(
-            "  Unix socket + bincode                    {:>12} msg/s",
-            group(self.uds_rate as u64)
+        rate(
+            "socket + bincode, one write per message",
+            self.uds_rate,
+            UNBUFFERED_MESSAGES,
+        );
+        rate(
+            "socket + bincode, batched writes (context)",
+            self.uds_buffered_rate,
+            THROUGHPUT_MESSAGES,
         );
         println!();
         println!("Targets");
-        println!(
-            "  busy-poll p50 <= {} ns                   {:>9} ns   {}",
-            TARGET_BUSY_P50_NS,
-            group(self.busy.p50),
-            met(self.busy.p50 <= TARGET_BUSY_P50_NS)
+        let target = |name: &str, value: String, ok: bool| {
+            println!("  {name:<52}{value:>13}  {}", met(ok));
+        };
+        target(
+            &format!("busy-poll p50 <= {TARGET_BUSY_P50_NS} ns"),
+            format!("{} ns", group(self.busy.p50)),
+            self.busy.p50 <= TARGET_BUSY_P50_NS,
+        );
+        target(
+            &format!("event p50 <= {TARGET_EVENT_OVER_PIPE} x pipe p50"),
+            format!("{:.2} x", self.event_over_pipe()),
+            self.event_over_pipe() <= TARGET_EVENT_OVER_PIPE,
+        );
+        target(
+            &format!("iceoryx2 >= {TARGET_THROUGHPUT_RATIO} x socket throughput"),
+            format!("{:.2} x", self.throughput_ratio()),
+            self.throughput_ratio() >= TARGET_THROUGHPUT_RATIO,
+        );
+        target(
+            &format!("64 KiB socket p50 >= {TARGET_LARGE_RATIO} x iceoryx2 p50"),
+            format!("{:.1} x", self.large_ratio()),
+            self.large_ratio() >= TARGET_LARGE_RATIO,
         );
         println!(
-            "  event p50 <= {:.1} x pipe p50              {:>9.2} x    {}",
-            TARGET_EVENT_OVER_PIPE,
-            self.event_over_pipe(),
-            met(self.event_over_pipe() <= TARGET_EVENT_OVER_PIPE)
-        );
-        println!(
-            "  iceoryx2 >= {:.0} x socket throughput        {:>9.2} x    {}",
-            TARGET_THROUGHPUT_RATIO,
-            self.throughput_ratio(),
-            met(self.throughput_ratio() >= TARGET_THROUGHPUT_RATIO)
-        );
-        println!(
-            "  64 KiB socket p50 >= {:.0} x iceoryx2 p50   {:>9.2} x    {} (busy-poll; blocking: {:.2} x)",
-            TARGET_LARGE_RATIO,
-            self.large_ratio(),
-            met(self.large_ratio() >= TARGET_LARGE_RATIO),
+            "    (64 KiB with payload fill and checksum timed: {:.1} x; both blocking: {:.2} x)",
+            self.large_full_ratio(),
             self.large_blocking_ratio()
         );
+        if self.contended_rounds > 0 {
+            println!();
+            println!(
+                "Warning: {} rounds ran while other work kept up to {:.2} CPUs busy.",
+                self.contended_rounds, self.max_round_other_cpus
+            );
+        }
     }
 }
 
@@ -485,7 +814,7 @@ fn group(v: u64) -> String {
     let s = v.to_string();
     let mut out = String::new();
     for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
+        if i > 0 && (s.len() - i).is_multiple_of(3) {
             out.push(',');
         }
         out.push(c);
