@@ -48,13 +48,18 @@ const READY_TIMEOUT: Duration = Duration::from_secs(30);
 /// How long a process may take to stop after SIGTERM before it is killed.
 const STOP_TIMEOUT: Duration = Duration::from_secs(5);
 
+/// How old the newest file of a namespace without any node must be before it
+/// counts as abandoned (a run being created has fresh files and no readable
+/// node yet).
+const ABANDONED_AFTER: Duration = Duration::from_secs(10);
+
 /// Removes what dead processes of earlier runs left on this machine: the
 /// resources of dead nodes of every nauta namespace, and every file of a
-/// namespace none of whose nodes is alive.
+/// namespace that was abandoned (see `Namespace::remove_if_abandoned`).
 pub fn cleanup_stale_runs() -> usize {
     Namespace::on_this_machine()
         .into_iter()
-        .map(|ns| ns.remove_if_unused().unwrap_or(0))
+        .map(|ns| ns.remove_if_abandoned(ABANDONED_AFTER).unwrap_or(0))
         .sum()
 }
 

@@ -3,6 +3,7 @@
 //! be listed and removed.
 
 use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::Duration;
 
 use iceoryx2::config::Config;
 use iceoryx2::node::NodeView;
@@ -72,35 +73,69 @@ impl Namespace {
         Ok(config)
     }
 
-    /// Removes every resource of this run when no node of it is alive: the stale
-    /// resources of dead nodes, then what iceoryx2 keeps per namespace on purpose
-    /// (its persistent global management segment) and anything else bearing the
-    /// run's prefix. Returns the number of files removed; nothing is touched while
-    /// a node of the run lives.
+    /// Removes every resource of this run once its last process has left:
+    /// the stale resources of dead nodes, then what iceoryx2 keeps per namespace
+    /// on purpose (its persistent global management segment) and anything else
+    /// bearing the run's prefix. For a process of the run on its way out
+    /// ([`crate::Context::finish`]). Nothing is touched while any node of the run
+    /// is alive or in a state that cannot be read (being created). Returns the
+    /// number of files removed.
     pub fn remove_if_unused(&self) -> anyhow::Result<usize> {
         let config = self.config()?;
         let report = cleanup_dead_nodes(&config)?;
-        if report.alive > 0 || report.failed > 0 {
+        if report.alive > 0 || report.unknown > 0 || report.failed > 0 {
             return Ok(0);
         }
-        let mut removed = 0;
-        for f in self.shm_files() {
-            if std::fs::remove_file(std::path::Path::new("/dev/shm").join(&f)).is_ok() {
-                removed += 1;
-            }
+        Ok(self.remove_files(&config))
+    }
+
+    /// Like [`Namespace::remove_if_unused`], for a namespace this process is not
+    /// part of (another run's, found by [`Namespace::on_this_machine`]): it is
+    /// removed only on evidence that it was abandoned, i.e. a dead node was found,
+    /// or no node exists at all and its newest file is older than `grace`. A run
+    /// that is starting right now (its first node not yet readable) is left alone.
+    pub fn remove_if_abandoned(&self, grace: Duration) -> anyhow::Result<usize> {
+        let config = self.config()?;
+        let report = cleanup_dead_nodes(&config)?;
+        if report.alive > 0 || report.unknown > 0 || report.failed > 0 {
+            return Ok(0);
         }
+        let crashed = report.removed > 0;
+        if !crashed && self.newest_file_age(&config).is_none_or(|age| age < grace) {
+            return Ok(0);
+        }
+        Ok(self.remove_files(&config))
+    }
+
+    fn paths(&self, config: &Config) -> Vec<std::path::PathBuf> {
+        let mut paths: Vec<std::path::PathBuf> = self
+            .shm_files()
+            .into_iter()
+            .map(|f| std::path::Path::new("/dev/shm").join(f))
+            .collect();
         let mut rest = Vec::new();
         walk(
             std::path::Path::new(&config.global.root_path().to_string()),
             &self.prefix(),
             &mut rest,
         );
-        for f in rest {
-            if std::fs::remove_file(&f).is_ok() {
-                removed += 1;
-            }
-        }
-        Ok(removed)
+        paths.extend(rest.into_iter().map(std::path::PathBuf::from));
+        paths
+    }
+
+    fn newest_file_age(&self, config: &Config) -> Option<Duration> {
+        self.paths(config)
+            .iter()
+            .filter_map(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
+            .filter_map(|t| t.elapsed().ok())
+            .min()
+    }
+
+    fn remove_files(&self, config: &Config) -> usize {
+        self.paths(config)
+            .iter()
+            .filter(|p| std::fs::remove_file(p).is_ok())
+            .count()
     }
 
     /// Files of this run in /dev/shm (shared memory segments), by name.
@@ -177,6 +212,8 @@ pub struct CleanupReport {
     pub failed: u64,
     /// Nodes still alive.
     pub alive: u64,
+    /// Nodes whose state could not be read (being created, or no permission).
+    pub unknown: u64,
 }
 
 /// Removes the stale resources of every dead node under `config` (processes that
@@ -188,7 +225,7 @@ pub fn cleanup_dead_nodes(config: &Config) -> anyhow::Result<CleanupReport> {
         match state {
             NodeState::Alive(_) => report.alive += 1,
             NodeState::Dead(view) => dead.push(view),
-            NodeState::Inaccessible(_) | NodeState::Undefined(_) => {}
+            NodeState::Inaccessible(_) | NodeState::Undefined(_) => report.unknown += 1,
         }
         CallbackProgression::Continue
     })
