@@ -13,6 +13,7 @@
 //! - [`alignment`]: static coarse alignment from accelerometer and magnetometer.
 //! - [`estimator`]: the [`AttitudeEstimator`] role trait and its snapshot.
 //! - [`gyro`]: pure gyro integration, paper 000's baseline.
+//! - [`strapdown`]: free strapdown inertial navigation on the WGS84 ellipsoid.
 //!
 //! Equations name the paper (`../shared/papers/`, by number) or the textbook
 //! (Titterton & Weston 2004; Groves 2013; Farrell 2008) they implement.
@@ -24,8 +25,10 @@ pub mod attitude;
 pub mod earth;
 pub mod estimator;
 pub mod gyro;
+pub mod strapdown;
 
 pub use alignment::Alignment;
 pub use attitude::{AttitudeError, HeadingInclinationError};
 pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot};
 pub use gyro::{GyroIntegrator, GyroState};
+pub use strapdown::{Strapdown, StrapdownError, StrapdownState};
