@@ -57,10 +57,35 @@ const ABANDONED_AFTER: Duration = Duration::from_secs(10);
 /// resources of dead nodes of every nauta namespace, and every file of a
 /// namespace that was abandoned (see `Namespace::remove_if_abandoned`).
 pub fn cleanup_stale_runs() -> usize {
-    Namespace::on_this_machine()
+    let removed = Namespace::on_this_machine()
         .into_iter()
         .map(|ns| ns.remove_if_abandoned(ABANDONED_AFTER).unwrap_or(0))
-        .sum()
+        .sum();
+    // Run directories (effective manifests) of runs that left nothing else.
+    if let Ok(dirs) = std::fs::read_dir(runs_dir()) {
+        for d in dirs.filter_map(|d| d.ok()) {
+            let name = d.file_name().to_string_lossy().into_owned();
+            let old = d
+                .metadata()
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| t.elapsed().ok())
+                .is_some_and(|age| age > ABANDONED_AFTER);
+            if old
+                && let Ok(ns) = Namespace::new(&name)
+                && let Ok(config) = ns.config()
+                && ns.all_files(&config).is_empty()
+            {
+                let _ = std::fs::remove_dir_all(d.path());
+            }
+        }
+    }
+    removed
+}
+
+/// Where run directories (the effective manifest of each run) live.
+fn runs_dir() -> PathBuf {
+    std::env::temp_dir().join("nauta")
 }
 
 struct Proc {
@@ -124,7 +149,7 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
             "removed files left by dead processes of earlier runs"
         );
     }
-    let run_dir = std::env::temp_dir().join("nauta").join(namespace.as_str());
+    let run_dir = runs_dir().join(namespace.as_str());
     std::fs::create_dir_all(&run_dir)
         .with_context(|| format!("cannot create {}", run_dir.display()))?;
     let manifest_file = run_dir.join("manifest.toml");
@@ -200,6 +225,9 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     })();
     if let Err(e) = startup {
         stop_all(&mut running);
+        drop((taps, inboxes, events, events_inbox));
+        ctx.finish();
+        let _ = std::fs::remove_dir_all(&run_dir);
         return Err(e);
     }
 

@@ -33,6 +33,10 @@ pub struct RunSection {
     /// How long a `sim`-mode publisher waits on a full subscriber before giving up, ms.
     #[serde(default = "deadline_ms")]
     pub backpressure_deadline_ms: u64,
+    /// Set by the launcher in the effective manifest it hands to processes: the
+    /// file the user gave, so that errors name it.
+    #[serde(default)]
+    pub source: Option<String>,
 }
 
 fn auto() -> String {
@@ -162,8 +166,12 @@ impl Manifest {
             _ => toml::Table::try_into(table.clone()),
         }
         .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+        let path = match &raw.run.source {
+            Some(src) => PathBuf::from(src),
+            None => path.to_owned(),
+        };
         let m = Manifest {
-            path: path.to_owned(),
+            path,
             run: raw.run,
             site: raw.site,
             processes: raw.process,
@@ -262,9 +270,17 @@ impl Manifest {
         ClockMode::parse(&self.run.clock, self.run.rate).unwrap_or(ClockMode::Sim)
     }
 
-    /// The effective manifest as TOML (after overrides), to hand to processes.
+    /// The effective manifest as TOML (after overrides), to hand to processes;
+    /// `[run] source` names the file it came from.
     pub fn to_toml(&self) -> anyhow::Result<String> {
-        Ok(toml::to_string(&self.table)?)
+        let mut table = self.table.clone();
+        if let Some(run) = table.get_mut("run").and_then(toml::Value::as_table_mut) {
+            run.insert(
+                "source".into(),
+                toml::Value::String(self.path.display().to_string()),
+            );
+        }
+        Ok(toml::to_string(&table)?)
     }
 
     /// The section of process `name`.
@@ -448,6 +464,19 @@ params = { publish = true }
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown variant"), "{e}");
+    }
+
+    #[test]
+    fn effective_manifest_names_the_users_file() {
+        let m = Manifest::parse(Path::new("launch/survey.toml"), GOOD).expect("parses");
+        let effective = m.to_toml().expect("serialises");
+        let bad = effective.replace("gain = 1.5", "gain = \"high\"");
+        let m2 =
+            Manifest::parse(Path::new("/tmp/nauta/x/manifest.toml"), &effective).expect("parses");
+        assert_eq!(m2.path, Path::new("launch/survey.toml"));
+        let m3 = Manifest::parse(Path::new("/tmp/nauta/x/manifest.toml"), &bad).expect("parses");
+        let e = m3.params::<P>("attitude", None).unwrap_err().to_string();
+        assert!(e.starts_with("launch/survey.toml"), "{e}");
     }
 
     #[test]
