@@ -10,7 +10,7 @@ use anyhow::Context as _;
 use clap::Parser;
 use nauta_messages::checked::{Imu, StampOrder};
 use nauta_messages::*;
-use nauta_runtime::process::{ProcessArgs, init_tracing};
+use nauta_runtime::process::{ProcessArgs, service_main};
 use nauta_runtime::{
     Context, ControlServer, Describe, EventLoop, HealthReporter, LoopExit, OrderedMerge,
     PortDescription, Wake, services,
@@ -45,32 +45,8 @@ fn describe() -> Describe {
 }
 
 fn main() -> ExitCode {
-    init_tracing();
     let args = Args::parse();
-    if args.process.describe {
-        return match describe().print() {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("nauta-attitude: {e:#}");
-                ExitCode::FAILURE
-            }
-        };
-    }
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            tracing::error!("{e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run(args: &Args) -> anyhow::Result<()> {
-    let mut ctx = Context::from_args(Role::Attitude, &args.process, VARIANTS[0])?;
-    let result = serve(&mut ctx);
-    // Every port is closed now; leave the run (and tidy it if we were the last).
-    ctx.finish();
-    result
+    service_main(Role::Attitude, VARIANTS[0], &args.process, describe, serve)
 }
 
 fn serve(ctx: &mut Context) -> anyhow::Result<()> {

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context as _;
 use clap::Parser;
 use nauta_messages::*;
-use nauta_runtime::process::{ProcessArgs, init_tracing};
+use nauta_runtime::process::{ProcessArgs, service_main};
 use nauta_runtime::{
     Context, ControlServer, Describe, HealthReporter, Pacer, PortDescription, services,
 };
@@ -43,32 +43,8 @@ fn describe() -> Describe {
 }
 
 fn main() -> ExitCode {
-    init_tracing();
     let args = Args::parse();
-    if args.process.describe {
-        return match describe().print() {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("nauta-sensor: {e:#}");
-                ExitCode::FAILURE
-            }
-        };
-    }
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            tracing::error!("{e:#}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-fn run(args: &Args) -> anyhow::Result<()> {
-    let mut ctx = Context::from_args(Role::Sensor, &args.process, "scripted")?;
-    let result = serve(&mut ctx);
-    // Every port is closed now; leave the run (and tidy it if we were the last).
-    ctx.finish();
-    result
+    service_main(Role::Sensor, "scripted", &args.process, describe, serve)
 }
 
 fn serve(ctx: &mut Context) -> anyhow::Result<()> {

@@ -4,6 +4,11 @@
 //! [--variant V] [--standby]`, or `nauta-<role> --describe`.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
+
+use nauta_messages::Role;
+
+use crate::{Context, Describe};
 
 /// Arguments every service binary accepts (flatten into the binary's own parser).
 #[derive(Debug, Clone, clap::Args)]
@@ -44,4 +49,34 @@ pub fn init_tracing() {
         .try_init();
     // iceoryx2 logs on its own; keep it to real problems.
     iceoryx2::prelude::set_log_level(iceoryx2::prelude::LogLevel::Error);
+}
+
+/// The `main` of every service binary: with `--describe`, prints `describe()`;
+/// otherwise joins the run ([`Context::from_args`]), runs `serve`, leaves the
+/// run ([`Context::finish`], once every port `serve` opened is closed) and turns
+/// the outcome into the exit code, logging an error once.
+pub fn service_main(
+    role: Role,
+    default_variant: &str,
+    args: &ProcessArgs,
+    describe: impl FnOnce() -> Describe,
+    serve: impl FnOnce(&mut Context) -> anyhow::Result<()>,
+) -> ExitCode {
+    init_tracing();
+    let result = if args.describe {
+        describe().print()
+    } else {
+        Context::from_args(role, args, default_variant).and_then(|mut ctx| {
+            let result = serve(&mut ctx);
+            ctx.finish();
+            result
+        })
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            tracing::error!("{e:#}");
+            ExitCode::FAILURE
+        }
+    }
 }
