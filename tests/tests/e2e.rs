@@ -83,6 +83,38 @@ fn digest(s: &Summary) -> String {
 }
 
 /// Criterion 1: Two processes exchange 100,000 IMU messages in sim mode with no sequence gap.
+/// Starts `nauta-attitude` directly (the binary contract, no launcher) in `ns`
+/// and waits until it reports ready.
+fn spawn_attitude_until_ready(
+    wd: &Watchdog,
+    ns: &Namespace,
+    manifest: &std::path::Path,
+    watch: &mut EventWatch,
+) -> Running {
+    let mut attitude = Running::spawn(
+        wd,
+        &bin("nauta-attitude"),
+        &[
+            "--manifest",
+            &manifest.display().to_string(),
+            "--process",
+            "attitude",
+            "--namespace",
+            ns.as_str(),
+            "--instance",
+            "0",
+        ],
+        None,
+    );
+    if !watch.wait_ready(wd, "attitude", &mut attitude) {
+        panic!(
+            "nauta-attitude exited before it was ready\n{}",
+            attitude.wait(wd)
+        );
+    }
+    attitude
+}
+
 #[test]
 fn sim_run_moves_100k_imu_messages_without_gap() {
     bin_dir();
@@ -229,27 +261,7 @@ fn next_launch_removes_leftovers_of_kill_9() {
             .publisher(&services::progress(Role::Sensor))
             .expect("progress publisher"),
     );
-    let mut attitude = Running::spawn(
-        &wd,
-        &bin("nauta-attitude"),
-        &[
-            "--manifest",
-            &manifest.display().to_string(),
-            "--process",
-            "attitude",
-            "--namespace",
-            ns.as_str(),
-            "--instance",
-            "0",
-        ],
-        None,
-    );
-    if !watch.wait_ready(&wd, "attitude", &mut attitude) {
-        panic!(
-            "nauta-attitude exited before it was ready\n{}",
-            attitude.wait(&wd)
-        );
-    }
+    let attitude = spawn_attitude_until_ready(&wd, &ns, &manifest, &mut watch);
     drop(inputs);
     drop(watch);
     assert!(
@@ -307,27 +319,7 @@ fn publisher_is_freed_from_a_subscriber_killed_with_9() {
         .ctx
         .publisher(&services::progress(Role::Sensor))
         .unwrap_or_else(|e| panic!("progress publisher: {e:#}"));
-    let mut attitude = Running::spawn(
-        &wd,
-        &bin("nauta-attitude"),
-        &[
-            "--manifest",
-            &manifest.display().to_string(),
-            "--process",
-            "attitude",
-            "--namespace",
-            ns.as_str(),
-            "--instance",
-            "0",
-        ],
-        None,
-    );
-    if !watch.wait_ready(&wd, "attitude", &mut attitude) {
-        panic!(
-            "nauta-attitude exited before it was ready\n{}",
-            attitude.wait(&wd)
-        );
-    }
+    let attitude = spawn_attitude_until_ready(&wd, &ns, &manifest, &mut watch);
     let subscribed = wait_until(&wd, Duration::from_secs(30), || imu.subscriber_count() >= 1);
     assert!(
         subscribed,
