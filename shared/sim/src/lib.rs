@@ -5,5 +5,18 @@
 //! - [`noise`]: the error processes sensors are built from (white noise, bias
 //!   instability, random walks, scale factors, dropouts, spikes, outliers) and
 //!   the statistics that check them (Allan deviation).
+//! - [`environment`]: WGS84 gravity and Earth rate, the WMM magnetic field,
+//!   sound speed (Mackenzie 1981) and the water current.
+//! - [`vehicle`]: a REMUS-100 class AUV with first-order surge, yaw and pitch
+//!   dynamics, buoyancy and propeller speed.
+//! - [`mission`]: waypoint routes and attitude scripts, and the `survey`, `lbl`,
+//!   `dr` and attitude scenario builders.
+//! - [`guidance`]: line-of-sight path following with heading and depth control.
+//! - [`trajectory`]: the truth generator and its exact noise-free IMU.
 
+pub mod environment;
+pub mod guidance;
+pub mod mission;
 pub mod noise;
+pub mod trajectory;
+pub mod vehicle;
