@@ -13,10 +13,13 @@
 //!   `dr` and attitude scenario builders.
 //! - [`guidance`]: line-of-sight path following with heading and depth control.
 //! - [`trajectory`]: the truth generator and its exact noise-free IMU.
+//! - [`suite`]: the seeded sensor suite that turns each truth step into the
+//!   measurements due (IMU, AHRS, DVL, depth, GPS, propeller, buoy modem, LBL).
 
 pub mod environment;
 pub mod guidance;
 pub mod mission;
 pub mod noise;
+pub mod suite;
 pub mod trajectory;
 pub mod vehicle;
