@@ -586,6 +586,13 @@ impl EventWatch {
         }
     }
 
+    /// Leaves the run like a nauta process does ([`Context::finish`]): if this
+    /// was the run's last node, nothing of the run is left behind.
+    pub fn finish(self) {
+        drop(self.events);
+        self.ctx.finish();
+    }
+
     /// Waits until process `name` announced READY; false if `child` exited first.
     pub fn wait_ready(&mut self, wd: &Watchdog, name: &str, child: &mut Running) -> bool {
         loop {

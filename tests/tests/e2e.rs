@@ -207,7 +207,7 @@ fn sigterm_leaves_no_shared_memory() {
             );
         }
     }
-    drop(watch);
+    watch.finish();
     assert!(
         !ns.shm_files().is_empty(),
         "a running run has no file with prefix {} in /dev/shm",
@@ -263,7 +263,7 @@ fn next_launch_removes_leftovers_of_kill_9() {
     );
     let attitude = spawn_attitude_until_ready(&wd, &ns, &manifest, &mut watch);
     drop(inputs);
-    drop(watch);
+    watch.finish();
     assert!(
         !ns.shm_files().is_empty(),
         "nauta-attitude is ready but has no file with prefix {} in /dev/shm",
@@ -366,6 +366,14 @@ fn publisher_is_freed_from_a_subscriber_killed_with_9() {
         imu.given_up()
     );
     assert!(watch.ctx.any_delivery_given_up());
+    drop((imu, _progress));
+    watch.finish();
+    let config = ns.config().expect("config");
+    assert!(
+        ns.all_files(&config).is_empty(),
+        "the run's files outlive its last process: {:?}",
+        ns.all_files(&config)
+    );
 }
 
 /// Criterion 6: Two sim runs with the same seed give bit-identical attitude outputs; another

@@ -59,4 +59,12 @@ fn request_reaches_the_process_and_is_answered() {
         server.join().expect("server thread").expect("server ran"),
         command::SNAPSHOT_NOW
     );
+    drop(client);
+    ctx.finish();
+    let config = ns.config().expect("config");
+    assert!(
+        ns.all_files(&config).is_empty(),
+        "{:?}",
+        ns.all_files(&config)
+    );
 }
