@@ -93,6 +93,7 @@ fn gm_calibration() -> f64 {
 /// Datasheet-style error specification of one inertial axis, SI units (see
 /// the module documentation for the model and units).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct InertialAxisSpec {
     /// White noise density N: rad/s/√Hz (gyro) or m/s²/√Hz (accelerometer).
     pub noise_density: f64,

@@ -47,6 +47,7 @@ fn chance<R: Rng + ?Sized>(rng: &mut R, p: f64) -> bool {
 ///   equal probability. Paper 002 §1.3 (Fig. 5) shows such spikes on the
 ///   surge velocity; their magnitude and rate are our choice (DESIGN §10).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DvlSpec {
     /// White noise σ per axis, m/s (default 0.01, our choice for a low-cost
     /// bottom-track DVL single ping).
@@ -224,6 +225,7 @@ impl DvlNoise {
 ///
 /// so a sound-speed error e_c scales every range by (1 + e_c).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ModemSpec {
     /// Probability a message is lost (default 0.1, our choice).
     pub loss_probability: f64,
@@ -331,6 +333,7 @@ impl ModemNoise {
 /// The range the vehicle computes is r̃ = c (t̃ − t_ta) / 2
 /// ([`LblSpec::range_from_round_trip`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LblSpec {
     /// Clock resolution Δ, s (default 100 µs, paper 003).
     pub clock_resolution: f64,
@@ -477,6 +480,7 @@ impl LblNoise {
 /// Pressure depth sensor (10 Hz in the scenarios): d̃ = d + d₀ + w,
 /// w ~ N(0, σ²), d in m (positive down).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DepthSpec {
     /// White noise σ, m (default 0.02, our choice).
     pub noise_sigma: f64,
@@ -536,6 +540,7 @@ impl DepthNoise {
 /// calibration (paper 000) estimates them. Local declination belongs to
 /// the Earth-field model that produces m, not to this sensor model.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MagnetometerSpec {
     /// White noise σ per axis, T (default 0.05 µT = 0.5 mG RMS, Xsens MTi
     /// 10-series datasheet as remembered; check against the PDF).

@@ -65,68 +65,6 @@ fn finite(name: &'static str, value: f64) -> Result<(), SuiteError> {
     }
 }
 
-// Serde mirrors of the noise specs (which derive serde without
-// `deny_unknown_fields`), so that a typo inside a nested table is an error.
-
-#[derive(Serialize, Deserialize)]
-#[serde(remote = "InertialAxisSpec", deny_unknown_fields)]
-struct InertialAxisSpecDef {
-    noise_density: f64,
-    bias_instability: f64,
-    rate_random_walk: f64,
-    turn_on_bias_sigma: f64,
-    scale_factor_sigma: f64,
-}
-
-#[derive(Serialize, Deserialize)]
-#[serde(remote = "MagnetometerSpec", deny_unknown_fields)]
-struct MagnetometerSpecDef {
-    noise_sigma: f64,
-    hard_iron: [f64; 3],
-    soft_iron: [[f64; 3]; 3],
-}
-
-#[derive(Serialize, Deserialize)]
-#[serde(remote = "DvlSpec", deny_unknown_fields)]
-struct DvlSpecDef {
-    noise_sigma: f64,
-    scale_factor_sigma: f64,
-    dropout_probability: f64,
-    mean_dropout_length: f64,
-    spike_probability: f64,
-    spike_magnitude: [f64; 2],
-    spike_surge_fraction: f64,
-}
-
-#[derive(Serialize, Deserialize)]
-#[serde(remote = "DepthSpec", deny_unknown_fields)]
-struct DepthSpecDef {
-    noise_sigma: f64,
-    offset: f64,
-}
-
-#[derive(Serialize, Deserialize)]
-#[serde(remote = "ModemSpec", deny_unknown_fields)]
-struct ModemSpecDef {
-    loss_probability: f64,
-    clock_jitter_sigma: f64,
-    sound_speed: f64,
-    sound_speed_error: f64,
-}
-
-#[derive(Serialize, Deserialize)]
-#[serde(remote = "LblSpec", deny_unknown_fields)]
-struct LblSpecDef {
-    clock_resolution: f64,
-    turnaround: f64,
-    sound_speed: f64,
-    timing_jitter_sigma: f64,
-    detection_range_50: f64,
-    detection_range_width: f64,
-    multipath_probability: f64,
-    multipath_delay: [f64; 2],
-}
-
 /// IMU (`sensor/imu`): gyro, accelerometer and magnetometer at every
 /// simulator step (100 Hz).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -135,14 +73,11 @@ pub struct ImuConfig {
     /// Whether the IMU publishes (default true).
     pub enabled: bool,
     /// Gyro axis errors, rad/s (default [`InertialAxisSpec::mti30_gyro`], MTi-30 datasheet).
-    #[serde(with = "InertialAxisSpecDef")]
     pub gyro: InertialAxisSpec,
     /// Accelerometer axis errors, m/s² (default [`InertialAxisSpec::mti30_accel`]).
-    #[serde(with = "InertialAxisSpecDef")]
     pub accel: InertialAxisSpec,
     /// Magnetometer hard/soft iron and noise, tesla inside (published in µT)
     /// (default [`MagnetometerSpec::default`]).
-    #[serde(with = "MagnetometerSpecDef")]
     pub mag: MagnetometerSpec,
 }
 
@@ -215,7 +150,6 @@ pub struct DvlConfig {
     /// Altitude white noise σ, m (default 0.1, our choice).
     pub altitude_sigma_m: f64,
     /// Velocity errors (default [`DvlSpec::default`]).
-    #[serde(with = "DvlSpecDef")]
     pub noise: DvlSpec,
 }
 
@@ -242,7 +176,6 @@ pub struct DepthConfig {
     /// Rate, Hz (default 10, DESIGN §10).
     pub rate_hz: f64,
     /// Errors (default [`DepthSpec::default`]).
-    #[serde(with = "DepthSpecDef")]
     pub noise: DepthSpec,
 }
 
@@ -348,7 +281,6 @@ pub struct ModemConfig {
     /// Buoy GPS σ per horizontal axis, m (default 2.5, our choice).
     pub buoy_gps_sigma_m: f64,
     /// Timing errors (default [`ModemSpec::default`]).
-    #[serde(with = "ModemSpecDef")]
     pub noise: ModemSpec,
 }
 
@@ -427,7 +359,6 @@ pub struct LblConfig {
     pub transponders: Vec<Transponder>,
     /// Round-trip errors (default [`LblSpec::default`]: 100 µs clock, paper
     /// 003); its `sound_speed` is replaced by the suite's true sound speed.
-    #[serde(with = "LblSpecDef")]
     pub noise: LblSpec,
 }
 
