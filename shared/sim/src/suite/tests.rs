@@ -5,6 +5,7 @@ use std::sync::OnceLock;
 use super::*;
 use crate::environment::{Environment, MagneticField};
 use crate::mission::{self, Mission, Origin, SurveySpec};
+use crate::noise::DepthSpec;
 use crate::trajectory::{ImuSample, SimConfig, Simulator, Truth};
 
 type Steps = Vec<(Truth, ImuSample)>;
@@ -479,4 +480,14 @@ fn presets_and_serde() {
     assert_eq!(a.heading_bias_time_s, 600.0);
     let typo = MapDeserializer::<_, Error>::new([("rate", 20.0)].into_iter());
     assert!(AhrsConfig::deserialize(typo).is_err());
+    // Inside a nested noise table too (the specs refuse unknown keys themselves).
+    let depth = DepthSpec::default();
+    let ok = MapDeserializer::<_, Error>::new(
+        [("noise_sigma", depth.noise_sigma), ("offset", depth.offset)].into_iter(),
+    );
+    assert_eq!(DepthSpec::deserialize(ok).expect("complete"), depth);
+    let nested_typo = MapDeserializer::<_, Error>::new(
+        [("noise_sigma", 0.02), ("offset", 0.0), ("ofset", 0.1)].into_iter(),
+    );
+    assert!(DepthSpec::deserialize(nested_typo).is_err());
 }
