@@ -13,6 +13,8 @@
 //!   `dr` and attitude scenario builders.
 //! - [`guidance`]: line-of-sight path following with heading and depth control.
 //! - [`trajectory`]: the truth generator and its exact noise-free IMU.
+//! - [`scenario`]: scenario parameters (survey, lbl, dr, attitude motions) and
+//!   the generator that steps the truth and the sensors together.
 //! - [`suite`]: the seeded sensor suite that turns each truth step into the
 //!   measurements due (IMU, AHRS, DVL, depth, GPS, propeller, buoy modem, LBL).
 
@@ -20,6 +22,7 @@ pub mod environment;
 pub mod guidance;
 pub mod mission;
 pub mod noise;
+pub mod scenario;
 pub mod suite;
 pub mod trajectory;
 pub mod vehicle;

@@ -90,6 +90,10 @@ pub struct WaypointMission {
     pub origin: Origin,
     /// Initial heading, rad.
     pub start_yaw_rad: f64,
+    /// Time floating still at the surface before the vehicle starts, s: the
+    /// static period an attitude alignment needs (paper 000 averages 400
+    /// samples, 4 s at 100 Hz). Propeller stopped, no roll oscillation.
+    pub still_s: f64,
     /// The route.
     pub waypoints: Vec<Waypoint>,
 }
@@ -124,6 +128,7 @@ impl WaypointMission {
             name: name.to_owned(),
             origin,
             start_yaw_rad,
+            still_s: 0.0,
             waypoints,
         }
     }
@@ -233,6 +238,15 @@ impl Mission {
         }
     }
 
+    /// The same mission with `still_s` of rest at the surface before the
+    /// route starts (waypoint missions; an attitude script is unchanged).
+    pub fn with_still_s(mut self, still_s: f64) -> Self {
+        if let Self::Waypoints(w) = &mut self {
+            w.still_s = still_s;
+        }
+        self
+    }
+
     /// The origin.
     pub fn origin(&self) -> Origin {
         match self {
@@ -317,6 +331,7 @@ pub fn survey(origin: Origin, spec: &SurveySpec) -> Mission {
         name: "survey".into(),
         origin,
         start_yaw_rad: spec.heading_rad,
+        still_s: 0.0,
         waypoints: lawnmower(
             spec.legs,
             spec.leg_length_m,
@@ -337,6 +352,7 @@ pub fn lbl(origin: Origin) -> Mission {
         name: "lbl".into(),
         origin,
         start_yaw_rad: 0.0,
+        still_s: 0.0,
         waypoints: vec![
             Waypoint::new(500.0, 0.0, d, u),
             Waypoint::new(500.0, 400.0, d, u),
@@ -386,6 +402,7 @@ pub fn dr(origin: Origin, which: DrManoeuvre) -> Mission {
         name: name.into(),
         origin,
         start_yaw_rad: 0.0,
+        still_s: 0.0,
         waypoints,
     })
 }

@@ -52,7 +52,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::environment::Environment;
 use crate::guidance::{Guidance, GuidanceParams, Phase};
 use crate::mission::{AttitudeMission, Mission};
-use crate::vehicle::{Vehicle, VehicleParams, VehicleState};
+use crate::vehicle::{Commands, Vehicle, VehicleParams, VehicleState};
 
 /// Simulator settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -263,7 +263,7 @@ impl Simulator {
         let (q_nb, v, current) = match &self.driver {
             Driver::Vehicle(_) => {
                 let current = self.env.current.at(t_s);
-                let roll = self.config.vehicle.roll_rad(t_s, self.roll_phase_rad);
+                let roll = self.roll_rad(t_s);
                 (
                     s.attitude(roll),
                     self.vehicle.velocity_ned(s, &current),
@@ -294,6 +294,26 @@ impl Simulator {
             propeller_rad_s: s.propeller_rad_s(),
             distance_m: s.distance_m,
         }
+    }
+
+    /// Rest at the surface before the route starts, s (waypoint missions).
+    pub fn still_s(&self) -> f64 {
+        match &self.mission {
+            Mission::Waypoints(w) => w.still_s,
+            Mission::Attitude(_) => 0.0,
+        }
+    }
+
+    /// The vehicle's roll oscillation at `t_s`: zero while still, then
+    /// [`VehicleParams::roll_rad`] of the time since the start, its amplitude
+    /// ramped up over one period so that the attitude stays continuous.
+    fn roll_rad(&self, t_s: f64) -> f64 {
+        let p = &self.config.vehicle;
+        let t = t_s - self.still_s();
+        if t <= 0.0 {
+            return 0.0;
+        }
+        (t / p.roll_period_s).min(1.0) * p.roll_rad(t, self.roll_phase_rad)
     }
 
     /// The truth now (at the last IMU epoch).
@@ -343,9 +363,15 @@ impl Simulator {
     pub fn step(&mut self) -> (Truth, ImuSample) {
         let t0 = self.k as f64 * self.dt_s;
         let t1 = (self.k + 1) as f64 * self.dt_s;
+        let still_s = self.still_s();
         if let Driver::Vehicle(g) = &mut self.driver {
             let tr = &self.truth;
-            let cmd = g.command(&self.state, tr.north_m, tr.east_m, &tr.current_ned_m_s);
+            // Floating still (propeller stopped) until the route starts.
+            let cmd = if t0 < still_s {
+                Commands::default()
+            } else {
+                g.command(&self.state, tr.north_m, tr.east_m, &tr.current_ned_m_s)
+            };
             let h = self.dt_s / self.config.substeps as f64;
             let current = self.env.current;
             for i in 0..self.config.substeps {

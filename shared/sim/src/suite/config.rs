@@ -362,6 +362,13 @@ pub struct LblConfig {
     pub noise: LblSpec,
 }
 
+impl LblConfig {
+    /// The transponder ids, in configuration order.
+    pub fn ids(&self) -> Vec<u32> {
+        self.transponders.iter().map(|t| t.id).collect()
+    }
+}
+
 impl Default for LblConfig {
     fn default() -> Self {
         Self {

@@ -646,8 +646,10 @@ impl SensorSuite {
         self.stats
     }
 
-    /// Registers a ping to `transponder_id` sent at `stamp_ns` (see the module
-    /// docs). Errors if LBL is disabled or the id unknown.
+    /// Registers a ping to `transponder_id` requested at `stamp_ns`; it leaves
+    /// at the next tick of the LBL clock at or after it (see the module docs),
+    /// which is the reply's `interrogation_stamp_ns`. Errors if LBL is
+    /// disabled or the id unknown.
     pub fn interrogate(&mut self, transponder_id: u32, stamp_ns: u64) -> Result<(), SuiteError> {
         let lbl = self.lbl.as_mut().ok_or(SuiteError::LblDisabled)?;
         let transponder = *self
@@ -657,13 +659,16 @@ impl SensorSuite {
             .iter()
             .find(|t| t.id == transponder_id)
             .ok_or(SuiteError::UnknownTransponder(transponder_id))?;
+        // The acoustic system fires on its own clock: the next tick at or
+        // after the request, so every reply stamp is a whole number of ticks.
+        let send_ns = stamp_ns.div_ceil(lbl.tick_ns) * lbl.tick_ns;
         let mut ping = Ping {
             transponder,
-            send_ns: stamp_ns,
+            send_ns,
             leg: PingLeg::Waiting,
         };
         if let Some(last) = &self.prev
-            && stamp_ns <= self::stamp_ns(last.t_s)
+            && send_ns <= self::stamp_ns(last.t_s)
         {
             ping.leg = outbound(self.sound_speed_m_s, lbl, &ping, &position(last));
         }
