@@ -188,11 +188,8 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     // nothing yet), so they go first: their publishers are what consumers wait
     // for. Once all are ready and the launcher's own taps are connected, the
     // sources are activated: nothing is published before everyone listens.
-    let mut order: Vec<&Proc> = procs
-        .iter()
-        .filter(|p| p.describe.inputs.is_empty())
-        .collect();
-    order.extend(procs.iter().filter(|p| !p.describe.inputs.is_empty()));
+    let mut order: Vec<&Proc> = procs.iter().filter(|p| p.describe.is_source()).collect();
+    order.extend(procs.iter().filter(|p| !p.describe.is_source()));
     let started = Instant::now();
     let mut running: Vec<Running> = Vec::new();
     let mut observer = Observer::default();
@@ -212,13 +209,13 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
                 namespace: namespace.as_str(),
                 instance: 0,
                 variant: section.variant.as_deref(),
-                standby: p.describe.inputs.is_empty(),
+                standby: p.describe.is_source(),
                 args: &section.args,
             })?);
         }
         wait_all_ready(&ctx, &mut events, &mut running)?;
         connect_taps(&ctx, &taps)?;
-        for p in order.iter().filter(|p| p.describe.inputs.is_empty()) {
+        for p in order.iter().filter(|p| p.describe.is_source()) {
             activate(&ctx, p)?;
         }
         Ok(())
@@ -315,6 +312,7 @@ fn check_wiring(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
     for p in procs {
         for i in &p.describe.inputs {
             match published.get(i.service.as_str()) {
+                None if i.optional => {}
                 None => bail!(
                     "{}: process.{}: subscribes to {} ({}), which no process publishes",
                     manifest.path.display(),
@@ -441,7 +439,14 @@ fn summary(
     failures: &[String],
     exit: LoopExit,
 ) -> String {
-    let mission_s = manifest.run.duration_s;
+    // The sensor's own stream (the truth, else the IMU): what was simulated,
+    // and over how much wall time its first and last samples arrived.
+    let sensor = [TRUTH_SERVICE, IMU_SERVICE]
+        .iter()
+        .find_map(|name| taps.iter().find(|t| t.service() == *name && t.count() > 0));
+    let mission_s = sensor
+        .and_then(|t| t.span())
+        .map_or(manifest.run.duration_s, |(_, last)| last as f64 * 1e-9);
     let mut parts = vec![format!(
         "nauta: run {ns} {} {:.1} s mission in {:.2} s wall ({:.1}x)",
         manifest.clock().name(),
@@ -463,6 +468,16 @@ fn summary(
             _ => 0.0,
         };
         parts.push(format!("{s} {} msgs {:.1} Hz", t.count(), rate));
+    }
+    if let Some(t) = sensor
+        && let (Some((a, b)), Some(w)) = (t.span(), t.wall_span())
+    {
+        parts.push(format!(
+            "{} span {:.3} s simulated in {:.3} s wall",
+            t.service(),
+            (b - a) as f64 * 1e-9,
+            w.as_secs_f64()
+        ));
     }
     parts.push(format!("gaps {gaps}"));
     let (lost, rejected) = obs.process_losses();

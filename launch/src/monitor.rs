@@ -3,6 +3,7 @@
 //! and rates, and the attitude error against the truth, for the summary line.
 
 use std::any::Any;
+use std::time::{Duration, Instant};
 
 use nauta_estimation::AttitudeError;
 use nauta_messages::checked::{Attitude, Truth};
@@ -23,6 +24,8 @@ pub trait Tap {
     fn gaps(&self) -> u64;
     /// First and last stamps seen, ns.
     fn span(&self) -> Option<(u64, u64)>;
+    /// Wall time from receiving the first message to receiving the last.
+    fn wall_span(&self) -> Option<Duration>;
     /// Attaches to the publishers present now; false while there is none.
     fn connect(&self) -> anyhow::Result<bool>;
 }
@@ -30,6 +33,7 @@ pub trait Tap {
 struct TypedTap<M: Message> {
     sub: Subscriber<M>,
     span: Option<(u64, u64)>,
+    received: Option<(Instant, Instant)>,
 }
 
 impl<M: Message> Tap for TypedTap<M> {
@@ -38,7 +42,9 @@ impl<M: Message> Tap for TypedTap<M> {
     }
     fn drain(&mut self, obs: &mut Observer) -> anyhow::Result<usize> {
         let mut n = 0;
+        let now = Instant::now();
         while let Some(m) = self.sub.receive()? {
+            self.received = Some(self.received.map_or((now, now), |(a, _)| (a, now)));
             let s = m.header().stamp_ns;
             self.span = Some(self.span.map_or((s, s), |(a, b)| (a.min(s), b.max(s))));
             obs.observe(self.sub.service(), &m);
@@ -54,6 +60,9 @@ impl<M: Message> Tap for TypedTap<M> {
     }
     fn span(&self) -> Option<(u64, u64)> {
         self.span
+    }
+    fn wall_span(&self) -> Option<Duration> {
+        self.received.map(|(a, b)| b - a)
     }
     fn connect(&self) -> anyhow::Result<bool> {
         Connect::connect(&self.sub)
@@ -71,7 +80,11 @@ impl MessageVisitor for MakeTap<'_> {
         let made = services::by_name::<M>(self.service).and_then(|spec| {
             let (sub, inbox) = self.ctx.subscriber(&spec)?;
             Ok((
-                Box::new(TypedTap { sub, span: None }) as Box<dyn Tap>,
+                Box::new(TypedTap {
+                    sub,
+                    span: None,
+                    received: None,
+                }) as Box<dyn Tap>,
                 inbox,
             ))
         });

@@ -41,6 +41,7 @@ fn describe() -> Describe {
             PortDescription::of(&services::progress(Role::Attitude)),
         ],
         variants: VARIANTS.iter().map(|v| v.to_string()).collect(),
+        source: false,
     }
 }
 
@@ -132,14 +133,16 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                     return Ok(ControlFlow::Continue(()));
                 }
             }
-            // Progress first: an end-of-stream seen here means every IMU sample sent
-            // before it is already in the IMU queue, drained just below.
+            // Progress first: a watermark or end-of-stream seen here means every
+            // IMU sample sent before it is already in the IMU queue, drained just
+            // below; the watermark applies after that drain.
             let mut ended = false;
+            let mut watermark = None;
             sensor_progress.drain(|p| {
                 if p.header.is_end_of_stream() {
                     ended = true;
                 } else {
-                    merge.advance(IMU, p.header.stamp_ns);
+                    watermark = Some(p.header.stamp_ns);
                 }
             })?;
             let imu_service = IMU_SERVICE;
@@ -157,6 +160,9 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                     Err(e) => health.reject(imu_service, &e),
                 }
             })?;
+            if let Some(w) = watermark {
+                merge.advance(IMU, w);
+            }
             if ended || stop {
                 merge.end(IMU);
             }
@@ -182,12 +188,11 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
             }
             estimate_out.flush();
             if merge.is_finished() {
-                let mut eos = Progress {
-                    header: Header::new(last_stamp, 0, Role::Attitude, ctx.instance),
-                    published: estimate_out.published(),
-                };
-                eos.header.flags |= Flags::END_OF_STREAM.0;
-                progress_out.publish_now(eos)?;
+                progress_out.publish_now(Progress::end_of_stream(
+                    last_stamp,
+                    Role::Attitude,
+                    estimate_out.published(),
+                ))?;
                 return Ok(ControlFlow::Break(()));
             }
             Ok(ControlFlow::Continue(()))

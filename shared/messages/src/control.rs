@@ -2,7 +2,7 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 
-use crate::Header;
+use crate::{Flags, Header, Role};
 
 /// `run/events`, on change.
 pub const RUN_EVENTS_SERVICE: &str = "run/events";
@@ -73,6 +73,23 @@ message! {
         pub header: Header,
         /// Messages this publisher has sent on its data services so far.
         pub published: u64,
+    }
+}
+
+impl Progress {
+    /// A watermark at `stamp_ns` from `role` (instance filled in by the publisher).
+    pub fn at(stamp_ns: u64, role: Role, published: u64) -> Self {
+        Progress {
+            header: Header::new(stamp_ns, 0, role, 0),
+            published,
+        }
+    }
+
+    /// The end of `role`'s stream, after its last stamp `stamp_ns`.
+    pub fn end_of_stream(stamp_ns: u64, role: Role, published: u64) -> Self {
+        let mut p = Self::at(stamp_ns, role, published);
+        p.header.flags |= Flags::END_OF_STREAM.0;
+        p
     }
 }
 

@@ -15,6 +15,10 @@ pub struct PortDescription {
     /// Pinned type name, e.g. `nauta.ImuSample.v1`.
     #[serde(rename = "type")]
     pub type_name: String,
+    /// An input the process can run without: the wiring check accepts it
+    /// when nobody publishes it (e.g. the sensor's `lbl/interrogate`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub optional: bool,
 }
 
 impl PortDescription {
@@ -23,6 +27,15 @@ impl PortDescription {
         PortDescription {
             service: spec.name.clone(),
             type_name: M::TYPE_NAME.to_owned(),
+            optional: false,
+        }
+    }
+
+    /// An optional input (see [`PortDescription::optional`]).
+    pub fn optional<M: Message>(spec: &ServiceSpec<M>) -> Self {
+        PortDescription {
+            optional: true,
+            ..Self::of(spec)
         }
     }
 }
@@ -38,6 +51,20 @@ pub struct Describe {
     pub outputs: Vec<PortDescription>,
     /// Variants it implements; the first is the default.
     pub variants: Vec<String>,
+    /// A data source: it produces data on its own (its inputs, if any, are
+    /// feedback such as LBL interrogations), so the launcher starts it in
+    /// standby and activates it once every process is ready. A process
+    /// without inputs is always a source.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub source: bool,
+}
+
+impl Describe {
+    /// Whether the launcher must start this process in standby (see
+    /// [`Describe::source`]).
+    pub fn is_source(&self) -> bool {
+        self.source || self.inputs.is_empty()
+    }
 }
 
 impl Describe {

@@ -161,6 +161,19 @@ impl Inbox {
     pub fn clear(&self) {
         let _ = self.listener.try_wait(|_| {});
     }
+
+    /// Waits up to `timeout` for a notification and consumes every pending
+    /// one; true if there was any. For a process that must wait on one input
+    /// outside its [`crate::EventLoop`] (bounded: check for termination between
+    /// calls).
+    pub fn wait(&self, timeout: Duration) -> bool {
+        let mut any = false;
+        let _ = self.listener.timed_wait(|_| any = true, timeout);
+        if any {
+            self.clear();
+        }
+        any
+    }
 }
 
 /// Sequence-gap bookkeeping for one input, per (source, instance).
