@@ -43,6 +43,12 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Simulator speed: the scenarios generated in-process, all sensors, one core.
+    Sim {
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -62,6 +68,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Launch(args) => launch::run(&args).map(ExitCode::from),
         Command::Bench { which } => match which {
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
         },
         Command::IpcPeer { args } => bench::ipc::peer(&args).map(|()| ExitCode::SUCCESS),
     }

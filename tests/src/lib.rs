@@ -494,6 +494,13 @@ pub fn launch(wd: &Watchdog, args: &[&str]) -> Finished {
     start_launch(wd, args).wait(wd)
 }
 
+/// Runs `nauta launch <manifest> <args>` to its end, sharing the launch gate.
+pub fn launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> Finished {
+    let mut all: Vec<String> = vec!["launch".into(), manifest.display().to_string()];
+    all.extend(args.iter().map(|s| s.to_string()));
+    Running::spawn(wd, &bin("nauta"), &all, Some(Gate::share())).wait(wd)
+}
+
 // ---------------------------------------------------------------------------
 // Summary line
 // ---------------------------------------------------------------------------
@@ -537,6 +544,26 @@ impl Summary {
     pub fn gaps(&self) -> Option<u64> {
         self.parts()
             .find_map(|p| p.strip_prefix("gaps ")?.trim().parse().ok())
+    }
+
+    /// The sensor stream's span (`SERVICE span S s simulated in W s wall`):
+    /// (service, simulated seconds, wall seconds) from its first to its last sample.
+    pub fn sensor_span(&self) -> Option<(String, f64, f64)> {
+        self.parts().find_map(|p| {
+            let (service, rest) = p.split_once(" span ")?;
+            let mut w = rest.split(' ');
+            let sim = w.next()?.parse().ok()?;
+            let wall = w.nth(3)?.parse().ok()?;
+            Some((service.to_owned(), sim, wall))
+        })
+    }
+
+    /// Simulated seconds of the run (`... sim 60.0 s mission ...`).
+    pub fn mission_s(&self) -> Option<f64> {
+        let head = self.parts().next()?;
+        let w: Vec<&str> = head.split(' ').collect();
+        let i = w.iter().position(|x| *x == "mission")?;
+        w.get(i.checked_sub(2)?)?.parse().ok()
     }
 
     /// Attitude digest (`attitude digest HEX`).
@@ -614,4 +641,23 @@ impl EventWatch {
             std::thread::sleep(Duration::from_millis(5));
         }
     }
+}
+
+/// `s` without ANSI escape sequences (tracing colours its output).
+pub fn strip_ansi(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut chars = s.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            // CSI: ESC [ ... final byte in @..~
+            for d in chars.by_ref() {
+                if ('@'..='~').contains(&d) && d != '[' {
+                    break;
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }

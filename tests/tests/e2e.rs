@@ -60,24 +60,6 @@ fn attitude_input_gaps(stderr: &str) -> Option<u64> {
         })
 }
 
-fn strip_ansi(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    let mut chars = s.chars();
-    while let Some(c) = chars.next() {
-        if c == '\u{1b}' {
-            // CSI: ESC [ ... final byte in @..~
-            for d in chars.by_ref() {
-                if ('@'..='~').contains(&d) && d != '[' {
-                    break;
-                }
-            }
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
 fn digest(s: &Summary) -> String {
     s.digest().unwrap_or_default()
 }
@@ -427,7 +409,7 @@ fn sim_runs_are_deterministic() {
 /// The summary parser itself.
 #[test]
 fn summary_parsing() {
-    let line = "nauta: run r1-2-3 sim 60.0 s mission in 0.14 s wall (438.7x) | attitude/estimate 5801 msgs 100.0 Hz | sensor/imu 6000 msgs 100.0 Hz | sensor/depth 600 msgs 10.0 Hz | sim/truth 6000 msgs 100.0 Hz | gaps 0 | attitude error rms roll 0.140° over 5801 samples | attitude digest 6dd6335c7369c535 | all processes exited 0";
+    let line = "nauta: run r1-2-3 sim 60.0 s mission in 0.14 s wall (438.7x) | attitude/estimate 5801 msgs 100.0 Hz | sensor/imu 6000 msgs 100.0 Hz | sensor/depth 600 msgs 10.0 Hz | sim/truth 6000 msgs 100.0 Hz | sim/truth span 59.990 s simulated in 0.120 s wall | gaps 0 | attitude error rms roll 0.140° over 5801 samples | attitude digest 6dd6335c7369c535 | all processes exited 0";
     let s = Summary::find(&format!("noise\n{line}\n")).expect("summary");
     assert_eq!(s.namespace(), Some("r1-2-3"));
     assert_eq!(s.count("sensor/imu"), Some(6000));
@@ -435,6 +417,9 @@ fn summary_parsing() {
     assert_eq!(s.count("sensor/dvl"), None);
     assert_eq!(s.count("sensor"), None);
     assert_eq!(s.gaps(), Some(0));
+    assert_eq!(s.count("sim/truth"), Some(6000));
+    assert_eq!(s.sensor_span(), Some(("sim/truth".to_owned(), 59.99, 0.12)));
+    assert_eq!(s.mission_s(), Some(60.0));
     assert_eq!(s.digest().as_deref(), Some("6dd6335c7369c535"));
     assert!(Summary::find("nauta: error: x").is_none());
 }

@@ -1,3 +1,4 @@
 //! `nauta bench ...`: benchmarks that print figures (JSON with `--json`).
 
 pub mod ipc;
+pub mod sim;

@@ -1,6 +1,9 @@
-//! `nauta-sensor`: the data source of a run. For now it publishes the scripted
-//! mission of [`scripted`] (IMU, depth and truth); the full simulator, replay and
-//! import come with their own issues.
+//! `nauta-sensor`: the data source of a run. It runs a scenario of the
+//! simulator ([`nauta_sim::scenario`]: survey, lbl, dr, attitude motions) and
+//! publishes the truth and every simulated sensor at its own rate (DESIGN §4):
+//! in `sim` clock as fast as the pipeline consumes (back-pressured,
+//! deterministic), in `wall` clock paced to real time or a multiple of it. It
+//! answers LBL interrogations in closed loop ([`lbl_link`]).
 
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -9,13 +12,17 @@ use anyhow::Context as _;
 use clap::Parser;
 use nauta_messages::*;
 use nauta_runtime::process::{ProcessArgs, service_main};
-use nauta_runtime::{
-    Context, ControlServer, Describe, HealthReporter, Pacer, PortDescription, services,
-};
+use nauta_runtime::{Context, ControlServer, Describe, HealthReporter, Pacer};
+use nauta_sim::mission::Origin;
+use nauta_sim::scenario::Generator;
 
-mod scripted;
+mod lbl_link;
+mod outputs;
+mod params;
 
-use scripted::{Script, ScriptParams};
+use lbl_link::{LblLink, Waited};
+use outputs::Outputs;
+use params::SensorParams;
 
 /// Publishes the sensors and the truth of a simulated mission.
 #[derive(Debug, Parser)]
@@ -25,49 +32,97 @@ struct Args {
     process: ProcessArgs,
 }
 
-/// Samples published between two flushes (one wake-up of the consumers).
+/// Steps published between two flushes (one wake-up of the consumers).
 const BATCH: u64 = 32;
+
+/// How far the manifest's `[site] magnetic_declination_deg` may be from the
+/// World Magnetic Model's before the sensor warns, degrees.
+const DECLINATION_TOLERANCE_DEG: f64 = 0.2;
 
 fn describe() -> Describe {
     Describe {
         role: Role::Sensor.name().into(),
-        inputs: vec![],
-        outputs: vec![
-            PortDescription::of(&services::imu()),
-            PortDescription::of(&services::depth()),
-            PortDescription::of(&services::truth()),
-            PortDescription::of(&services::progress(Role::Sensor)),
-        ],
-        variants: vec!["scripted".into()],
+        inputs: lbl_link::describe(),
+        outputs: outputs::describe(),
+        variants: vec!["sim".into()],
+        source: true,
     }
 }
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    service_main(Role::Sensor, "scripted", &args.process, describe, serve)
+    service_main(Role::Sensor, "sim", &args.process, describe, serve)
+}
+
+/// Answers control requests: true if STOP was asked.
+fn serve_control(
+    control: &mut ControlServer,
+    ctx: &Context,
+    last_stamp: u64,
+) -> anyhow::Result<bool> {
+    let mut stop = false;
+    control.serve(|req| {
+        let status = match req.command {
+            command::STOP => {
+                stop = true;
+                0
+            }
+            command::SNAPSHOT_NOW => 0,
+            _ => 2,
+        };
+        ControlResponse {
+            header: Header::new(last_stamp, 0, Role::Sensor, ctx.instance),
+            status,
+            state: if stop {
+                state::DRAINING
+            } else {
+                state::RUNNING
+            },
+            last_stamp_ns: last_stamp,
+        }
+    })?;
+    Ok(stop)
 }
 
 fn serve(ctx: &mut Context) -> anyhow::Result<()> {
-    let params: ScriptParams = ctx.params()?;
     let manifest = ctx.manifest()?;
+    let place = format!(
+        "{}: process.{}.params",
+        manifest.path.display(),
+        ctx.process
+    );
+    let params = SensorParams::from_table(ctx.params::<toml::Table>()?, &place)?;
     let site = manifest
         .site
         .context("the manifest has no [site] (latitude_deg, longitude_deg)")?;
-    let duration_s = manifest.run.duration_s;
-    let seed = manifest.run.seed;
-    let mut script = Script::new(
-        params,
-        site.latitude_deg.to_radians(),
-        site.longitude_deg.to_radians(),
+    let (duration_s, seed) = (manifest.run.duration_s, manifest.run.seed);
+    let origin = Origin::from_degrees(site.latitude_deg, site.longitude_deg);
+    let mut generator = Generator::new(
+        &params.scenario,
+        origin,
+        params.sensors.clone(),
         seed,
-    )?;
-    let steps = (duration_s / script.dt_s()).round() as u64;
-    let depth_every = script.depth_every();
+        duration_s,
+    )
+    .with_context(|| format!("{place}: cannot build the scenario"))?;
+    let wmm_declination_deg = generator
+        .simulator()
+        .environment()
+        .magnetic
+        .declination_rad
+        .to_degrees();
+    if (wmm_declination_deg - site.magnetic_declination_deg).abs() > DECLINATION_TOLERANCE_DEG {
+        tracing::warn!(
+            manifest = site.magnetic_declination_deg,
+            wmm = wmm_declination_deg,
+            "[site] magnetic_declination_deg differs from the World Magnetic Model's value the simulator uses; estimators will see a heading error"
+        );
+    }
+    let lbl_enabled = params.sensors.lbl.enabled;
+    let tick_ns = nauta_sim::suite::stamp_ns(params.sensors.lbl.noise.clock_resolution);
 
-    let mut imu = ctx.publisher(&services::imu())?;
-    let mut depth = ctx.publisher(&services::depth())?;
-    let mut truth = ctx.publisher(&services::truth())?;
-    let mut progress = ctx.publisher(&services::progress(Role::Sensor))?;
+    let mut out = Outputs::open(ctx)?;
+    let mut link = LblLink::open(ctx, params.lbl_sync_hz, tick_ns)?;
     let mut health = HealthReporter::new(ctx)?;
     let mut pacer = Pacer::new(ctx.clock);
     // Requests are polled once per batch (a source never blocks on inputs).
@@ -77,106 +132,92 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     if ctx.standby && !hold_until_activated(ctx, &mut control, &mut health)? {
         return Ok(());
     }
+    // Every process is ready now: an interrogator's publishers exist.
+    link.connect()?;
+    let lockstep = ctx.clock.is_lossless() && lbl_enabled;
     health.state = state::RUNNING;
     let span = tracing::info_span!("sensor", process = %ctx.process, clock = ctx.clock.name());
     let _e = span.enter();
-    tracing::info!(steps, duration_s, "publishing");
+    tracing::info!(
+        scenario = params.scenario.scenario.name(),
+        duration_s,
+        seed,
+        interrogator = link.interrogator_present(),
+        "publishing"
+    );
 
     let mut last_health = Instant::now();
     let mut last_stamp = 0;
     let mut stopped = false;
-    for k in 1..=steps {
-        let s = script.step();
-        last_stamp = s.stamp_ns;
-        let wait = pacer.delay_for(s.stamp_ns);
+    let mut steps = 0u64;
+    while let Some(m) = generator.step() {
+        let m = m?;
+        last_stamp = m.stamp_ns;
+        let wait = pacer.delay_for(m.stamp_ns);
         if !wait.is_zero() {
-            imu.flush();
-            depth.flush();
-            truth.flush();
+            out.flush();
             if !ctx.sleep(wait) {
                 stopped = true;
                 break;
             }
         }
-        let header = Header::new(s.stamp_ns, 0, Role::Sensor, 0);
-        truth.publish(TruthState {
-            header,
-            lat_rad: s.lat_rad,
-            lon_rad: s.lon_rad,
-            depth_m: s.depth_m,
-            vel_ned_m_s: s.vel_ned.into(),
-            quat_nb: quat(&s.q_nb),
-            rate_nb_body_rad_s: s.rate_nb_body.into(),
-            current_ned_m_s: [0.0; 3],
-            distance_m: s.distance_m,
-        })?;
-        imu.publish(ImuSample {
-            header,
-            gyro_rad_s: s.gyro.into(),
-            accel_m_s2: s.accel.into(),
-            mag_ut: s.mag.into(),
-            interval_s: s.dt_s,
-        })?;
-        if k % depth_every == 0 {
-            depth.publish(DepthSample {
-                header,
-                depth_m: s.depth_measured_m,
-            })?;
-        }
-        if k % BATCH == 0 {
-            truth.flush();
-            imu.flush();
-            depth.flush();
-            let mut stop_requested = false;
-            control.serve(|req| {
-                let status = match req.command {
-                    command::STOP => {
-                        stop_requested = true;
-                        0
-                    }
-                    _ => 2,
-                };
-                ControlResponse {
-                    header: Header::new(last_stamp, 0, Role::Sensor, 0),
-                    status,
-                    state: state::RUNNING,
-                    last_stamp_ns: last_stamp,
+        out.publish(&m)?;
+        steps += 1;
+        if lbl_enabled && let Some(w) = link.sync_point(m.stamp_ns) {
+            let published = out.published();
+            out.progress
+                .publish(Progress::at(w, Role::Sensor, published))?;
+            if lockstep && link.interrogator_present() {
+                out.flush();
+                let waited = link.wait_for(ctx, w, || {
+                    serve_control(&mut control, ctx, last_stamp).map(|stop| !stop)
+                })?;
+                if waited == Waited::Terminated {
+                    stopped = true;
+                    break;
                 }
-            })?;
-            if stop_requested || ctx.termination_requested() {
+                link.drain(&mut generator, m.stamp_ns, lbl_enabled, &mut health)?;
+            }
+        }
+        if steps.is_multiple_of(BATCH) {
+            out.flush();
+            if !lockstep {
+                link.drain(&mut generator, m.stamp_ns, lbl_enabled, &mut health)?;
+            }
+            if serve_control(&mut control, ctx, last_stamp)? || ctx.termination_requested() {
                 stopped = true;
                 break;
             }
             if last_health.elapsed() >= Duration::from_secs(1) {
                 last_health = Instant::now();
-                health.outputs = truth.published() + imu.published() + depth.published();
-                health.dropped = truth.given_up() + imu.given_up() + depth.given_up();
+                health.outputs = out.published();
+                health.dropped = out.given_up() + link.timed_out;
                 health.last_stamp_ns = last_stamp;
                 health.publish(ctx);
                 ctx.cleanup_dead_nodes();
             }
         }
     }
-    truth.flush();
-    imu.flush();
-    depth.flush();
+    out.flush();
     // End of stream: nothing more will come from this source.
-    let mut eos = Progress {
-        header: Header::new(last_stamp, 0, Role::Sensor, 0),
-        published: imu.published() + depth.published() + truth.published(),
-    };
-    eos.header.flags |= Flags::END_OF_STREAM.0;
-    progress.publish_now(eos)?;
+    let published = out.published();
+    out.progress
+        .publish_now(Progress::end_of_stream(last_stamp, Role::Sensor, published))?;
     health.state = state::STOPPED;
-    health.outputs = truth.published() + imu.published() + depth.published();
-    health.dropped = truth.given_up() + imu.given_up() + depth.given_up();
+    health.outputs = out.published();
+    health.dropped = out.given_up() + link.timed_out;
     health.last_stamp_ns = last_stamp;
     health.publish(ctx);
+    let stats = generator.suite().stats();
     tracing::info!(
-        imu = imu.published(),
-        depth = depth.published(),
-        truth = truth.published(),
-        given_up = health.dropped,
+        counts = ?out.counts(),
+        simulated_s = generator.t_s(),
+        interrogations = link.accepted,
+        late_interrogations = link.late,
+        interrogator_timeouts = link.timed_out,
+        lbl_no_reply = stats.lbl_no_reply,
+        lbl_multipath = stats.lbl_multipath,
+        given_up = out.given_up(),
         stopped_by_signal = stopped,
         "done"
     );
@@ -231,8 +272,4 @@ fn hold_until_activated(
             return Ok(false);
         }
     }
-}
-
-fn quat(q: &nalgebra::UnitQuaternion<f64>) -> [f64; 4] {
-    [q.w, q.i, q.j, q.k]
 }

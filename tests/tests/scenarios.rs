@@ -1,0 +1,341 @@
+//! End-to-end tests of the simulator scenarios (issue 3): the closed LBL loop
+//! with a scripted interrogator, wall-clock pacing, the whole survey in `sim`
+//! clock, and parameter overrides. Every test runs in its own namespace under a
+//! watchdog.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use nauta_runtime::Namespace;
+use nauta_sim::environment::Water;
+use nauta_sim::mission::Origin;
+use nauta_sim::noise::LblSpec;
+use nauta_sim::suite::LblLayout;
+use nauta_tests::*;
+use serde_json::Value;
+
+const BOUND: Duration = Duration::from_secs(240);
+
+fn scratch(ns: &Namespace) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("nauta-test-{}", ns.as_str()));
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}
+
+/// `launch/lbl.toml` plus the scripted interrogator writing `report`.
+fn lbl_manifest(dir: &Path, report: &Path) -> PathBuf {
+    let base = std::fs::read_to_string(workspace_root().join("launch/lbl.toml")).expect("lbl.toml");
+    let text = format!(
+        "{base}\n[process.lbl]\nbin = \"nauta-lbl-script\"\nparams = {{ report = {:?}, ping_every_s = 2.0, transponders = [1, 2] }}\n",
+        report.display().to_string()
+    );
+    let path = dir.join("lbl-script.toml");
+    std::fs::write(&path, text).expect("write manifest");
+    path
+}
+
+/// A `key=value` field of the sensor's final log line (`sensor: done ...`).
+fn sensor_done_field(stderr: &str, key: &str) -> Option<u64> {
+    strip_ansi(stderr)
+        .lines()
+        .filter(|l| l.contains("sensor") && l.contains(" done "))
+        .find_map(|l| {
+            l.split_whitespace()
+                .find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse().ok())
+        })
+}
+
+fn run_lbl(wd: &Watchdog, seed: &str) -> (String, Summary) {
+    let ns = Namespace::unique();
+    let dir = scratch(&ns);
+    let report = dir.join("report.json");
+    let manifest = lbl_manifest(&dir, &report);
+    let out = launch_manifest(
+        wd,
+        &manifest,
+        &[
+            "--fast",
+            "--duration",
+            "120",
+            "--seed",
+            seed,
+            "--namespace",
+            ns.as_str(),
+        ],
+    );
+    assert_eq!(out.code(), Some(0), "lbl run failed\n{out}");
+    let text = std::fs::read_to_string(&report).unwrap_or_else(|e| panic!("no report: {e}\n{out}"));
+    // The sensor's watermarks do not cost a consumer any sample: one attitude
+    // estimate per IMU sample from the end of the alignment.
+    let s = out.summary();
+    let imu = s.count("sensor/imu").expect("imu count");
+    let align = alignment_samples(&manifest);
+    assert_eq!(
+        s.count("attitude/estimate"),
+        Some(imu - (align - 1)),
+        "{}",
+        s.line
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    // In lock step: every ping registered at the instant it was stamped.
+    assert_eq!(
+        sensor_done_field(&out.stderr, "late_interrogations"),
+        Some(0),
+        "{out}"
+    );
+    assert_eq!(
+        sensor_done_field(&out.stderr, "interrogator_timeouts"),
+        Some(0),
+        "{out}"
+    );
+    assert!(
+        sensor_done_field(&out.stderr, "interrogations").is_some_and(|n| n >= 55),
+        "{out}"
+    );
+    (text, out.summary())
+}
+
+fn local(origin: &Origin, fix: &Value) -> [f64; 3] {
+    let num = |i: usize| fix[i].as_f64().expect("a number in a truth fix");
+    let (n, e) = origin.to_local(num(1), num(2));
+    [n, e, num(3)]
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Issue 3: the sensor answers `lbl/interrogate` in closed loop: only the
+/// transponder asked replies, once, after the acoustic travel both ways plus
+/// the turnaround, measured on the 100 µs clock; runs repeat bit for bit.
+#[test]
+fn lbl_transponders_answer_the_interrogator_in_closed_loop() {
+    bin_dir();
+    let wd = Watchdog::new("lbl_closed_loop", BOUND);
+    let (text, summary) = run_lbl(&wd, "7");
+    let r: Value = serde_json::from_str(&text).expect("report json");
+    let pings = r["pings"].as_array().expect("pings");
+    let replies = r["replies"].as_array().expect("replies");
+    let ping_truth = r["ping_truth"].as_array().expect("ping truth");
+    let reply_truth = r["reply_truth"].as_array().expect("reply truth");
+    // 120 s, a ping every 2 s from t = 2 s.
+    assert!(pings.len() >= 55, "{} pings", pings.len());
+    assert_eq!(ping_truth.len(), pings.len());
+    assert_eq!(reply_truth.len(), replies.len());
+    // Within 600 m of both transponders every ping is detected (r50 = 2 km),
+    // except the few whose reply is still travelling at the end.
+    assert!(
+        replies.len() + 2 >= pings.len(),
+        "{} replies to {} pings",
+        replies.len(),
+        pings.len()
+    );
+    assert_eq!(
+        summary.count("sensor/lbl"),
+        Some(replies.len() as u64),
+        "{}",
+        summary.line
+    );
+    assert_eq!(summary.gaps(), Some(0), "{}", summary.line);
+
+    let origin = Origin::from_degrees(38.6, -9.3);
+    let spec = LblSpec::default();
+    let c = Water::default().sound_speed_m_s(10.0);
+    let tick = spec.clock_resolution;
+    let transponders = LblLayout::Two.transponders();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut direct = 0;
+    for (reply, at_reply) in replies.iter().zip(reply_truth) {
+        let id = reply[0].as_u64().unwrap() as u32;
+        let sent = reply[1].as_u64().unwrap();
+        let stamp = reply[2].as_u64().unwrap();
+        let rtt = reply[3].as_f64().unwrap();
+        // Only the transponder asked replies, once per ping.
+        let k = pings
+            .iter()
+            .position(|p| p[1].as_u64() == Some(sent))
+            .unwrap_or_else(|| panic!("reply to a ping never sent: {reply}"));
+        assert_eq!(
+            pings[k][0].as_u64(),
+            Some(u64::from(id)),
+            "reply from the wrong transponder"
+        );
+        assert!(seen.insert(sent), "two replies to the ping at {sent}");
+        // Stamped on the clock: the interrogation stamp plus whole ticks.
+        let ticks = (rtt / tick).round();
+        assert!(
+            (rtt / tick - ticks).abs() < 1e-6,
+            "round trip {rtt} is not whole ticks"
+        );
+        assert_eq!(stamp - sent, (ticks * tick * 1e9).round() as u64);
+        // The physics: out from the vehicle at the ping, back to the vehicle
+        // at the reply, at the true sound speed, plus the turnaround.
+        let t = transponders.iter().find(|t| t.id == id).unwrap();
+        let x = [t.north_m, t.east_m, t.depth_m];
+        let expected =
+            (dist(local(&origin, &ping_truth[k]), x) + dist(local(&origin, at_reply), x)) / c
+                + spec.turnaround;
+        let err = rtt - expected;
+        // The clock floors: never late by a tick, never early, for a direct reply.
+        assert!(
+            err > -tick - 1e-6,
+            "reply earlier than physics: {err} s\n{reply}"
+        );
+        if err <= 1e-6 {
+            direct += 1;
+        } else {
+            // A multipath reply: late by 1-20 ms.
+            assert!(
+                err >= spec.multipath_delay[0] - tick - 1e-6
+                    && err <= spec.multipath_delay[1] + 1e-6,
+                "late by {err} s, outside the multipath delays"
+            );
+        }
+    }
+    assert!(
+        direct * 10 >= replies.len() * 8,
+        "{direct} direct of {}",
+        replies.len()
+    );
+
+    // Same seed, same bytes; another seed differs.
+    let (again, _) = run_lbl(&wd, "7");
+    assert_eq!(text, again, "two lbl runs with seed 7 differ");
+    let (other, _) = run_lbl(&wd, "8");
+    assert_ne!(text, other, "seeds 7 and 8 gave the same LBL exchange");
+}
+
+/// Issue 3: `--clock wall --duration 30` spans 30 s ± 0.5 s of wall time from
+/// the first to the last sensor sample; `--rate 10` runs ten times faster.
+#[test]
+fn wall_clock_paces_the_sensor_to_real_time_and_to_a_multiple_of_it() {
+    bin_dir();
+    let wd = Watchdog::new("wall_clock", BOUND);
+    let run = |extra: &[&str]| {
+        let ns = Namespace::unique();
+        let mut args = vec![
+            "--clock",
+            "wall",
+            "--duration",
+            "30",
+            "--namespace",
+            ns.as_str(),
+        ];
+        args.extend_from_slice(extra);
+        let out = launch(&wd, &args);
+        assert_eq!(out.code(), Some(0), "wall run failed\n{out}");
+        let s = out.summary();
+        assert_eq!(s.gaps(), Some(0), "{}", s.line);
+        s.sensor_span()
+            .unwrap_or_else(|| panic!("no sensor span\n{out}"))
+    };
+    let (service, sim, wall) = run(&[]);
+    // 100 Hz from t = 0.01 s to t = 30 s.
+    assert!(
+        (sim - 29.99).abs() < 1e-6,
+        "{service} spans {sim} s simulated"
+    );
+    assert!(
+        (wall - 30.0).abs() <= 0.5,
+        "{service}: 30 s of mission took {wall} s of wall time"
+    );
+    let (_, sim10, wall10) = run(&["--rate", "10"]);
+    assert!((sim10 - 29.99).abs() < 1e-6);
+    assert!(
+        (wall10 - 3.0).abs() <= 0.05,
+        "at --rate 10, 30 s of mission took {wall10} s of wall time"
+    );
+}
+
+/// Issue 3: `--fast` runs the whole survey to its end: the mission ends by
+/// itself (surfaced, propeller stopped) before the manifest's cap, with every
+/// sample delivered.
+#[test]
+fn fast_runs_the_whole_survey_to_the_end() {
+    bin_dir();
+    let wd = Watchdog::new("whole_survey", BOUND);
+    let ns = Namespace::unique();
+    let out = launch(&wd, &["--fast", "--namespace", ns.as_str()]);
+    assert_eq!(out.code(), Some(0), "survey failed\n{out}");
+    let s = out.summary();
+    let mission = s.mission_s().expect("mission seconds");
+    // About 43 minutes with the still start, the dive and the surfacing; the
+    // manifest allows up to an hour.
+    assert!(
+        (2400.0..3000.0).contains(&mission),
+        "the survey ended after {mission} s\n{}",
+        s.line
+    );
+    // 100 Hz from t = 0.01 s to the last step.
+    let (_, span, _) = s.sensor_span().expect("sensor span");
+    let steps = ((span + 0.01) * 100.0).round() as u64;
+    assert_eq!(s.count("sim/truth"), Some(steps), "{}", s.line);
+    assert_eq!(s.count("sensor/imu"), Some(steps), "{}", s.line);
+    assert_eq!(s.gaps(), Some(0), "{}", s.line);
+    // GPS at the surface only: at the start and after surfacing, never at depth.
+    let gps = s.count("sensor/gps").expect("gps count");
+    assert!(gps >= 20, "{gps} GPS fixes\n{}", s.line);
+    assert!(
+        (s.count("sensor/modem").unwrap_or(0) as f64) > mission / 30.0 * 0.5,
+        "{}",
+        s.line
+    );
+    assert!(s.line.contains("all processes exited 0"), "{}", s.line);
+}
+
+/// Issue 3: every scenario parameter can be changed from the command line,
+/// and a wrong one is refused with its name before anything is published.
+#[test]
+fn scenario_parameters_are_overridable_from_the_command_line() {
+    bin_dir();
+    let wd = Watchdog::new("overrides", BOUND);
+    let ns = Namespace::unique();
+    let out = launch(
+        &wd,
+        &[
+            "--fast",
+            "--namespace",
+            ns.as_str(),
+            "--set",
+            "sensor.params.survey.legs=1",
+            "--set",
+            "sensor.params.survey.leg_length_m=200.0",
+            "--set",
+            "sensor.params.sensors.dvl.rate_hz=2.0",
+        ],
+    );
+    assert_eq!(out.code(), Some(0), "{out}");
+    let s = out.summary();
+    let mission = s.mission_s().expect("mission seconds");
+    // One 200 m leg at 1.5 m/s: a few minutes.
+    assert!(
+        mission < 400.0,
+        "one short leg took {mission} s\n{}",
+        s.line
+    );
+    let dvl = s.count("sensor/dvl").expect("dvl count") as f64;
+    assert!(
+        (dvl - 2.0 * mission).abs() <= 1.0,
+        "{dvl} DVL samples in {mission} s at 2 Hz"
+    );
+
+    let bad = launch(
+        &wd,
+        &[
+            "--fast",
+            "--namespace",
+            Namespace::unique().as_str(),
+            "--set",
+            "sensor.params.sensors.dvl.colour=1",
+        ],
+    );
+    assert_ne!(
+        bad.code(),
+        Some(0),
+        "an unknown sensor key was accepted\n{bad}"
+    );
+    assert!(
+        bad.stderr.contains("colour"),
+        "the error does not name the key\n{bad}"
+    );
+}
