@@ -71,12 +71,15 @@ pub struct LblLink {
     /// Waits that hit the deadline.
     pub timed_out: u64,
     late_logged: bool,
+    lockstep: bool,
 }
 
 impl LblLink {
     /// Opens the inputs; `sync_hz` is the synchronisation rate, `tick_ns` the
-    /// LBL clock resolution.
-    pub fn open(ctx: &Context, sync_hz: f64, tick_ns: u64) -> anyhow::Result<Self> {
+    /// LBL clock resolution, `lockstep` whether the sensor waits for the
+    /// interrogator (`sim` clock), where a late ping is a contract violation
+    /// worth a warning (in `wall` clock every ping arrives a little late).
+    pub fn open(ctx: &Context, sync_hz: f64, tick_ns: u64, lockstep: bool) -> anyhow::Result<Self> {
         let (requests, requests_inbox) = ctx.subscriber(&services::lbl_interrogate())?;
         let (progress, progress_inbox) = ctx.subscriber(&services::progress(Role::Lbl))?;
         let sync_every_ns = ((1e9 / sync_hz).round() as u64).max(1);
@@ -95,6 +98,7 @@ impl LblLink {
             late: 0,
             timed_out: 0,
             late_logged: false,
+            lockstep,
         })
     }
 
@@ -189,7 +193,7 @@ impl LblLink {
                     self.accepted += 1;
                     if r.header.stamp_ns < last_step_ns {
                         self.late += 1;
-                        if !self.late_logged {
+                        if self.lockstep && !self.late_logged {
                             self.late_logged = true;
                             tracing::warn!(
                                 stamp_ns = r.header.stamp_ns,

@@ -122,7 +122,8 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     let tick_ns = nauta_sim::suite::stamp_ns(params.sensors.lbl.noise.clock_resolution);
 
     let mut out = Outputs::open(ctx)?;
-    let mut link = LblLink::open(ctx, params.lbl_sync_hz, tick_ns)?;
+    let lockstep = ctx.clock.is_lossless() && lbl_enabled;
+    let mut link = LblLink::open(ctx, params.lbl_sync_hz, tick_ns, lockstep)?;
     let mut health = HealthReporter::new(ctx)?;
     let mut pacer = Pacer::new(ctx.clock);
     // Requests are polled once per batch (a source never blocks on inputs).
@@ -134,7 +135,6 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     }
     // Every process is ready now: an interrogator's publishers exist.
     link.connect()?;
-    let lockstep = ctx.clock.is_lossless() && lbl_enabled;
     health.state = state::RUNNING;
     let span = tracing::info_span!("sensor", process = %ctx.process, clock = ctx.clock.name());
     let _e = span.enter();
@@ -179,11 +179,14 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                 link.drain(&mut generator, m.stamp_ns, lbl_enabled, &mut health)?;
             }
         }
+        // Wall clock: pings are registered as they come, at the next step (a
+        // receive on an empty input is a shared-memory read). Without LBL they
+        // are only counted as rejected, once per batch.
+        if !lockstep && (lbl_enabled || steps.is_multiple_of(BATCH)) {
+            link.drain(&mut generator, m.stamp_ns, lbl_enabled, &mut health)?;
+        }
         if steps.is_multiple_of(BATCH) {
             out.flush();
-            if !lockstep {
-                link.drain(&mut generator, m.stamp_ns, lbl_enabled, &mut health)?;
-            }
             if serve_control(&mut control, ctx, last_stamp)? || ctx.termination_requested() {
                 stopped = true;
                 break;
