@@ -47,6 +47,41 @@ pub fn describe(bin: &Path) -> anyhow::Result<Describe> {
         .with_context(|| format!("{} --describe printed invalid JSON", bin.display()))
 }
 
+/// Runs `bin --manifest FILE --process NAME --check [--variant V]`: the
+/// binary validates its own parameters. The error is the binary's message.
+pub fn check(
+    bin: &Path,
+    manifest: &Path,
+    process: &str,
+    variant: Option<&str>,
+) -> anyhow::Result<()> {
+    let mut cmd = Command::new(bin);
+    cmd.arg("--manifest")
+        .arg(manifest)
+        .args(["--process", process, "--check"]);
+    if let Some(v) = variant {
+        cmd.args(["--variant", v]);
+    }
+    let out = cmd
+        .env("NAUTA_LOG", "error")
+        .stdin(Stdio::null())
+        .output()
+        .with_context(|| format!("cannot run {} --check", bin.display()))?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let msg = String::from_utf8_lossy(&out.stderr);
+    let msg = msg.trim();
+    anyhow::bail!(
+        "{}",
+        if msg.is_empty() {
+            format!("{} --check failed: {}", bin.display(), out.status)
+        } else {
+            msg.to_owned()
+        }
+    )
+}
+
 /// A started process.
 #[derive(Debug)]
 pub struct Running {

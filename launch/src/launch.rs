@@ -88,14 +88,22 @@ fn runs_dir() -> PathBuf {
     std::env::temp_dir().join("nauta")
 }
 
+#[derive(Clone)]
 struct Proc {
     name: String,
     bin: PathBuf,
     describe: Describe,
 }
 
-/// Runs the pipeline; returns the process exit code.
-pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
+/// A checked manifest and its processes in start order.
+pub struct Plan {
+    /// The effective manifest (overrides applied).
+    pub manifest: Manifest,
+    procs: Vec<Proc>,
+}
+
+/// Options shared by `nauta launch` and `nauta check` that change the manifest.
+fn overrides(args: &LaunchArgs) -> Vec<String> {
     let mut overrides = args.set.clone();
     if args.fast {
         overrides.push("run.clock=\"sim\"".into());
@@ -112,27 +120,41 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     if let Some(s) = args.seed {
         overrides.push(format!("run.seed={s}"));
     }
-    let manifest = Manifest::load_with(&args.manifest, &overrides)?;
-    let namespace = match (&args.namespace, manifest.run.namespace.as_str()) {
-        (Some(ns), _) => Namespace::new(ns)?,
-        (None, "auto") => Namespace::unique(),
-        (None, ns) => Namespace::new(ns)?,
-    };
+    overrides
+}
 
-    // Binaries and their wiring, before anything starts.
+/// Reads and checks a manifest with its overrides: schema and values, every
+/// binary found and described, every chosen variant implemented, the wiring.
+/// Nothing is started. Errors name the file, the line and the key.
+pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<Plan> {
+    let manifest = Manifest::load_with(path, overrides)?;
     let mut procs = Vec::new();
     for (name, p) in &manifest.processes {
-        let bin = children::find_binary(&p.bin).with_context(|| format!("process {name}"))?;
-        let describe = children::describe(&bin).with_context(|| format!("process {name}"))?;
+        let bin = children::find_binary(&p.bin)
+            .map_err(|e| manifest.error_at(&format!("process.{name}.bin"), e))?;
+        let describe = children::describe(&bin)
+            .map_err(|e| manifest.error_at(&format!("process.{name}.bin"), format!("{e:#}")))?;
         if let Some(v) = &p.variant
             && !describe.variants.contains(v)
         {
-            bail!(
-                "{}: process.{name}.variant: {} does not implement {v:?} (it has {:?})",
-                manifest.path.display(),
-                p.bin,
-                describe.variants
-            );
+            return Err(manifest.error_at(
+                &format!("process.{name}.variant"),
+                format!(
+                    "{} does not implement {v:?} (it has {:?})",
+                    p.bin, describe.variants
+                ),
+            ));
+        }
+        for v in p.variants.keys() {
+            if !describe.variants.contains(v) {
+                return Err(manifest.error_at(
+                    &format!("process.{name}.variants.{v}"),
+                    format!(
+                        "{} has no variant {v:?} (it has {:?})",
+                        p.bin, describe.variants
+                    ),
+                ));
+            }
         }
         procs.push(Proc {
             name: name.clone(),
@@ -141,6 +163,83 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
         });
     }
     check_wiring(&manifest, &procs)?;
+    check_parameters(&manifest, &procs)?;
+    // Sources first (in standby: see docs/design-notes.md), then consumers,
+    // each after the processes its `after` names.
+    let order = manifest
+        .start_order(|n| u8::from(!procs.iter().any(|p| p.name == n && p.describe.is_source())));
+    let procs = order
+        .iter()
+        .filter_map(|n| procs.iter().position(|p| &p.name == n))
+        .map(|i| procs[i].clone())
+        .collect();
+    Ok(Plan { manifest, procs })
+}
+
+/// Every binary checks its own parameters in the effective manifest
+/// (`--check`), so a wrong value stops the run before anything starts.
+fn check_parameters(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
+    let dir = runs_dir();
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let file = dir.join(format!("check-{}.toml", std::process::id()));
+    std::fs::write(&file, manifest.to_toml()?)
+        .with_context(|| format!("cannot write {}", file.display()))?;
+    let result = procs.iter().try_for_each(|p| {
+        let variant = manifest.process(&p.name)?.variant.as_deref();
+        children::check(&p.bin, &file, &p.name, variant)
+    });
+    let _ = std::fs::remove_file(&file);
+    result
+}
+
+/// `nauta check`: validates only; prints one line per process.
+pub fn check(args: &LaunchArgs) -> anyhow::Result<()> {
+    let plan = prepare(&args.manifest, &overrides(args))?;
+    let m = &plan.manifest;
+    println!(
+        "{}: ok: {} clock, {} s, seed {}, {} processes",
+        args.manifest.display(),
+        m.clock().name(),
+        m.run.duration_s,
+        m.run.seed,
+        plan.procs.len()
+    );
+    for p in &plan.procs {
+        let section = m.process(&p.name)?;
+        let variant = section
+            .variant
+            .clone()
+            .or_else(|| p.describe.variants.first().cloned())
+            .unwrap_or_default();
+        println!(
+            "  {:<12} {} [{variant}]{} inputs {}, outputs {}{}",
+            p.name,
+            p.bin.display(),
+            if p.describe.is_source() {
+                " source,"
+            } else {
+                ""
+            },
+            p.describe.inputs.len(),
+            p.describe.outputs.len(),
+            if section.after.is_empty() {
+                String::new()
+            } else {
+                format!(", after {}", section.after.join(", "))
+            }
+        );
+    }
+    Ok(())
+}
+
+/// Runs the pipeline; returns the process exit code.
+pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
+    let Plan { manifest, procs } = prepare(&args.manifest, &overrides(args))?;
+    let namespace = match (&args.namespace, manifest.run.namespace.as_str()) {
+        (Some(ns), _) => Namespace::new(ns)?,
+        (None, "auto") => Namespace::unique(),
+        (None, ns) => Namespace::new(ns)?,
+    };
 
     let removed = cleanup_stale_runs();
     if removed > 0 {
@@ -188,8 +287,7 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     // nothing yet), so they go first: their publishers are what consumers wait
     // for. Once all are ready and the launcher's own taps are connected, the
     // sources are activated: nothing is published before everyone listens.
-    let mut order: Vec<&Proc> = procs.iter().filter(|p| p.describe.is_source()).collect();
-    order.extend(procs.iter().filter(|p| !p.describe.is_source()));
+    let order: Vec<&Proc> = procs.iter().collect();
     let started = Instant::now();
     let mut running: Vec<Running> = Vec::new();
     let mut observer = Observer::default();
@@ -200,8 +298,12 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
         manifest.run.seed
     );
     let startup = (|| -> anyhow::Result<()> {
+        let mut ready = std::collections::BTreeSet::new();
         for p in &order {
             let section = manifest.process(&p.name)?;
+            if !section.after.is_empty() {
+                wait_ready(&ctx, &mut events, &mut running, &mut ready, &section.after)?;
+            }
             running.push(children::spawn(&Launch {
                 bin: &p.bin,
                 name: &p.name,
@@ -213,7 +315,8 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
                 args: &section.args,
             })?);
         }
-        wait_all_ready(&ctx, &mut events, &mut running)?;
+        let everyone: Vec<String> = running.iter().map(|r| r.name.clone()).collect();
+        wait_ready(&ctx, &mut events, &mut running, &mut ready, &everyone)?;
         connect_taps(&ctx, &taps)?;
         for p in order.iter().filter(|p| p.describe.is_source()) {
             activate(&ctx, p)?;
@@ -313,41 +416,74 @@ fn check_wiring(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
         for i in &p.describe.inputs {
             match published.get(i.service.as_str()) {
                 None if i.optional => {}
-                None => bail!(
-                    "{}: process.{}: subscribes to {} ({}), which no process publishes",
-                    manifest.path.display(),
-                    p.name,
-                    i.service,
-                    i.type_name
-                ),
-                Some((t, by)) if *t != i.type_name => bail!(
-                    "{}: process.{}: subscribes to {} as {}, but {by} publishes it as {t}",
-                    manifest.path.display(),
-                    p.name,
-                    i.service,
-                    i.type_name
-                ),
+                None => {
+                    return Err(manifest.error_at(
+                        &format!("process.{}.bin", p.name),
+                        format!(
+                            "{} subscribes to {} ({}), which no process publishes",
+                            p.describe.role, i.service, i.type_name
+                        ),
+                    ));
+                }
+                Some((t, by)) if *t != i.type_name => {
+                    return Err(manifest.error_at(
+                        &format!("process.{}.bin", p.name),
+                        format!(
+                            "{} subscribes to {} as {}, but process {by} publishes it as {t}",
+                            p.describe.role, i.service, i.type_name
+                        ),
+                    ));
+                }
                 Some(_) => {}
+            }
+        }
+    }
+    // A process reports ready only once its inputs' publishers exist, so a
+    // publisher must not wait (`after`) for one of its own subscribers.
+    for p in procs {
+        let Ok(section) = manifest.process(&p.name) else {
+            continue;
+        };
+        for a in &section.after {
+            let Some(waited) = procs.iter().find(|q| &q.name == a) else {
+                continue;
+            };
+            if let Some(i) = waited.describe.inputs.iter().find(|i| {
+                !i.optional
+                    && published
+                        .get(i.service.as_str())
+                        .is_some_and(|(_, by)| *by == p.name)
+            }) {
+                return Err(manifest.error_at(
+                    &format!("process.{}.after", p.name),
+                    format!(
+                        "{a} cannot become ready before {} starts: it waits for {}, which {} publishes",
+                        p.name, i.service, p.name
+                    ),
+                ));
             }
         }
     }
     Ok(())
 }
 
-fn wait_all_ready(
+/// Waits until every process in `names` has reported ready; `ready` keeps
+/// the names seen so far across calls.
+fn wait_ready(
     ctx: &Context,
     events: &mut nauta_runtime::Subscriber<RunEvent>,
     running: &mut [Running],
+    ready: &mut std::collections::BTreeSet<String>,
+    names: &[String],
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let mut ready = std::collections::BTreeSet::new();
     loop {
         events.drain(|e| {
             if e.kind == event_kind::READY {
                 ready.insert(fixed_str(&e.process));
             }
         })?;
-        if running.iter().all(|r| ready.contains(&r.name)) {
+        if names.iter().all(|n| ready.contains(n)) {
             return Ok(());
         }
         for r in running.iter_mut() {
@@ -360,11 +496,7 @@ fn wait_all_ready(
             }
         }
         if t0.elapsed() > READY_TIMEOUT {
-            let missing: Vec<&str> = running
-                .iter()
-                .filter(|r| !ready.contains(&r.name))
-                .map(|r| r.name.as_str())
-                .collect();
+            let missing: Vec<&String> = names.iter().filter(|n| !ready.contains(*n)).collect();
             bail!("{missing:?} did not report ready within {READY_TIMEOUT:?}");
         }
         if !ctx.sleep(Duration::from_millis(2)) {

@@ -21,6 +21,9 @@ struct Cli {
 enum Command {
     /// Run a pipeline from a manifest (e.g. `nauta launch launch/survey.toml --duration 60 --fast`).
     Launch(launch::LaunchArgs),
+    /// Validate a manifest without starting anything: schema and values, the
+    /// binaries and their variants, the wiring (`nauta check launch/survey.toml`).
+    Check(launch::LaunchArgs),
     /// Benchmarks (use a release build).
     Bench {
         #[command(subcommand)]
@@ -66,6 +69,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Launch(args) => launch::run(&args).map(ExitCode::from),
+        Command::Check(args) => launch::check(&args).map(|()| ExitCode::SUCCESS),
         Command::Bench { which } => match which {
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),

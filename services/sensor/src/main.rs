@@ -11,8 +11,8 @@ use std::time::{Duration, Instant};
 use anyhow::Context as _;
 use clap::Parser;
 use nauta_messages::*;
-use nauta_runtime::process::{ProcessArgs, service_main};
-use nauta_runtime::{Context, ControlServer, Describe, HealthReporter, Pacer};
+use nauta_runtime::process::{ProcessArgs, service_main_checked};
+use nauta_runtime::{Context, ControlServer, Describe, HealthReporter, Manifest, Pacer};
 use nauta_sim::mission::Origin;
 use nauta_sim::scenario::Generator;
 
@@ -51,7 +51,14 @@ fn describe() -> Describe {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    service_main(Role::Sensor, "sim", &args.process, describe, serve)
+    service_main_checked(
+        Role::Sensor,
+        "sim",
+        &args.process,
+        describe,
+        |t| setup(&t.manifest, &t.process, &t.variant).map(|_| ()),
+        serve,
+    )
 }
 
 /// Answers control requests: true if STOP was asked.
@@ -84,20 +91,28 @@ fn serve_control(
     Ok(stop)
 }
 
-fn serve(ctx: &mut Context) -> anyhow::Result<()> {
-    let manifest = ctx.manifest()?;
-    let place = format!(
-        "{}: process.{}.params",
-        manifest.path.display(),
-        ctx.process
-    );
-    let params = SensorParams::from_table(ctx.params::<toml::Table>()?, &place)?;
-    let site = manifest
-        .site
-        .context("the manifest has no [site] (latitude_deg, longitude_deg)")?;
+/// Everything the sensor reads from the manifest, checked.
+struct Setup {
+    params: SensorParams,
+    generator: Generator,
+    duration_s: f64,
+    seed: u64,
+}
+
+/// Reads and checks this process's manifest section and builds the scenario
+/// (what `--check` validates and `serve` runs).
+fn setup(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result<Setup> {
+    let place = format!("{}: process.{process}.params", manifest.path.display());
+    let params = SensorParams::from_table(manifest.params(process, Some(variant))?, &place)?;
+    let site = manifest.site.with_context(|| {
+        format!(
+            "{}: the manifest has no [site] (latitude_deg, longitude_deg)",
+            manifest.path.display()
+        )
+    })?;
     let (duration_s, seed) = (manifest.run.duration_s, manifest.run.seed);
     let origin = Origin::from_degrees(site.latitude_deg, site.longitude_deg);
-    let mut generator = Generator::new(
+    let generator = Generator::new(
         &params.scenario,
         origin,
         params.sensors.clone(),
@@ -118,6 +133,21 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
             "[site] magnetic_declination_deg differs from the World Magnetic Model's value the simulator uses; estimators will see a heading error"
         );
     }
+    Ok(Setup {
+        params,
+        generator,
+        duration_s,
+        seed,
+    })
+}
+
+fn serve(ctx: &mut Context) -> anyhow::Result<()> {
+    let Setup {
+        params,
+        mut generator,
+        duration_s,
+        seed,
+    } = setup(ctx.manifest()?, &ctx.process, &ctx.variant)?;
     let lbl_enabled = params.sensors.lbl.enabled;
     let tick_ns = nauta_sim::suite::stamp_ns(params.sensors.lbl.noise.clock_resolution);
 

@@ -26,7 +26,7 @@ pub use control::{ControlClient, ControlServer};
 pub use describe::{Describe, PortDescription};
 pub use event_loop::{EventLoop, LoopExit, Wake};
 pub use health::HealthReporter;
-pub use manifest::Manifest;
+pub use manifest::{Manifest, RestartPolicy};
 pub use merge::OrderedMerge;
 pub use namespace::Namespace;
 pub use ports::{Connect, Inbox, Publisher, Subscriber};

@@ -82,6 +82,29 @@ pub struct RestartSection {
     pub backoff_ms: Option<[u64; 2]>,
 }
 
+/// When a process that exited is started again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RestartPolicy {
+    /// Never (the default).
+    Never,
+    /// After a non-zero exit or a death by signal.
+    OnFailure,
+    /// After any exit, including 0, until the run ends.
+    Always,
+}
+
+impl RestartPolicy {
+    /// Parses `never`, `on-failure` or `always`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "never" => Some(Self::Never),
+            "on-failure" => Some(Self::OnFailure),
+            "always" => Some(Self::Always),
+            _ => None,
+        }
+    }
+}
+
 /// `[process.NAME]`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -182,6 +205,35 @@ impl Manifest {
         Ok(m)
     }
 
+    /// An error about `key` (dotted, e.g. `process.attitude.bin`), naming the
+    /// file and, when the key is written in it, the line.
+    pub fn error_at(&self, key: &str, msg: impl std::fmt::Display) -> anyhow::Error {
+        self.err(key, msg)
+    }
+
+    /// Process names in start order: every process after those in its
+    /// `after` list, otherwise in the order `first` ranks them (lower first),
+    /// then by name. `check` has refused cycles.
+    pub fn start_order(&self, first: impl Fn(&str) -> u8) -> Vec<String> {
+        let mut done: Vec<String> = Vec::new();
+        let mut left: Vec<&String> = self.processes.keys().collect();
+        left.sort_by_key(|n| first(n));
+        while !left.is_empty() {
+            let Some(i) = left.iter().position(|n| {
+                self.processes[*n]
+                    .after
+                    .iter()
+                    .all(|a| done.iter().any(|d| d == a))
+            }) else {
+                // A cycle (refused by `check`): keep the rest in rank order.
+                done.extend(left.drain(..).cloned());
+                break;
+            };
+            done.push(left.remove(i).clone());
+        }
+        done
+    }
+
     fn err(&self, key: &str, msg: impl std::fmt::Display) -> anyhow::Error {
         match line_of(&self.text, key) {
             Some(line) => anyhow::anyhow!("{}:{line}: {key}: {msg}", self.path.display()),
@@ -246,6 +298,9 @@ impl Manifest {
                     ));
                 }
             }
+            if let Some(r) = &p.restart {
+                self.check_restart(name, r)?;
+            }
             check_finite(&p.params).map_err(|k| {
                 self.err(
                     &format!("process.{name}.params.{k}"),
@@ -259,6 +314,78 @@ impl Manifest {
                         "must be a finite number",
                     )
                 })?;
+            }
+        }
+        self.check_after_cycles()
+    }
+
+    fn check_restart(&self, name: &str, r: &RestartSection) -> anyhow::Result<()> {
+        let key = |k: &str| format!("process.{name}.restart.{k}");
+        if RestartPolicy::parse(&r.policy).is_none() {
+            return Err(self.err(
+                &key("policy"),
+                format!(
+                    "unknown policy {:?}; expected \"never\", \"on-failure\" or \"always\"",
+                    r.policy
+                ),
+            ));
+        }
+        if r.max == Some(0) {
+            return Err(self.err(&key("max"), "must be at least 1 (use policy = \"never\")"));
+        }
+        if let Some(w) = r.window_s
+            && !(w > 0.0 && w.is_finite())
+        {
+            return Err(self.err(
+                &key("window_s"),
+                format!("must be a positive number of seconds, got {w}"),
+            ));
+        }
+        if let Some([lo, hi]) = r.backoff_ms
+            && lo > hi
+        {
+            return Err(self.err(
+                &key("backoff_ms"),
+                format!("[first, longest] must not decrease, got [{lo}, {hi}]"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refuses a cycle in `after`, naming it.
+    fn check_after_cycles(&self) -> anyhow::Result<()> {
+        // Depth-first search from every process; `path` is the current chain.
+        fn visit<'a>(
+            m: &'a Manifest,
+            name: &'a str,
+            path: &mut Vec<&'a str>,
+            clear: &mut std::collections::BTreeSet<&'a str>,
+        ) -> Option<Vec<&'a str>> {
+            if clear.contains(name) {
+                return None;
+            }
+            if let Some(i) = path.iter().position(|p| *p == name) {
+                let mut cycle = path[i..].to_vec();
+                cycle.push(name);
+                return Some(cycle);
+            }
+            path.push(name);
+            for a in &m.processes[name].after {
+                if let Some(c) = visit(m, a, path, clear) {
+                    return Some(c);
+                }
+            }
+            path.pop();
+            clear.insert(name);
+            None
+        }
+        let mut clear = std::collections::BTreeSet::new();
+        for name in self.processes.keys() {
+            if let Some(cycle) = visit(self, name, &mut Vec::new(), &mut clear) {
+                return Err(self.err(
+                    &format!("process.{}.after", cycle[0]),
+                    format!("cycle in `after`: {}", cycle.join(" -> ")),
+                ));
             }
         }
         Ok(())
@@ -345,7 +472,7 @@ fn line_of(text: &str, key: &str) -> Option<usize> {
             continue;
         };
         let k = k.trim();
-        if k == last || k.ends_with(&format!(".{last}")) {
+        if k == last || k.ends_with(&format!(".{last}")) || sets_inline(t, last) {
             if in_section {
                 return Some(i + 1);
             }
@@ -353,6 +480,19 @@ fn line_of(text: &str, key: &str) -> Option<usize> {
         }
     }
     fallback
+}
+
+/// Whether `line` sets `key` inside an inline table (`x = { key = 1 }`).
+fn sets_inline(line: &str, key: &str) -> bool {
+    let Some(brace) = line.find('{') else {
+        return false;
+    };
+    let inner = &line[brace..];
+    inner.match_indices(key).any(|(i, _)| {
+        let before = inner[..i].chars().next_back();
+        let after = inner[i + key.len()..].trim_start();
+        before.is_some_and(|c| c == '{' || c == ',' || c.is_whitespace()) && after.starts_with('=')
+    })
 }
 
 /// Applies `run.KEY=VALUE` or `PROCESS.KEY=VALUE` (KEY may be dotted) to the table.
@@ -464,6 +604,59 @@ params = { publish = true }
             .unwrap_err()
             .to_string();
         assert!(e.contains("unknown variant"), "{e}");
+    }
+
+    #[test]
+    fn restart_policies_are_checked() {
+        let with = |restart: &str| {
+            let text = format!("{GOOD}restart = {restart}\n");
+            Manifest::parse(Path::new("m.toml"), &text).map_err(|e| e.to_string())
+        };
+        with(r#"{ policy = "on-failure", max = 5, window_s = 60, backoff_ms = [20, 1000] }"#)
+            .expect("valid");
+        for (restart, key) in [
+            (r#"{ policy = "sometimes" }"#, "restart.policy"),
+            (r#"{ policy = "always", max = 0 }"#, "restart.max"),
+            (
+                r#"{ policy = "always", window_s = -1.0 }"#,
+                "restart.window_s",
+            ),
+            (
+                r#"{ policy = "always", backoff_ms = [500, 20] }"#,
+                "restart.backoff_ms",
+            ),
+            (r#"{ policy = "always", tries = 3 }"#, "tries"),
+        ] {
+            let e = with(restart).expect_err(restart);
+            assert!(e.contains("m.toml") && e.contains(key), "{restart}: {e}");
+        }
+    }
+
+    #[test]
+    fn after_orders_the_start_and_refuses_cycles() {
+        let three = |a: &str, b: &str, c: &str| {
+            format!(
+                "[run]\nduration_s = 1\n[process.a]\nbin = \"x\"\nafter = {a}\n\
+                 [process.b]\nbin = \"x\"\nafter = {b}\n[process.c]\nbin = \"x\"\nafter = {c}\n"
+            )
+        };
+        let m = Manifest::parse(Path::new("m.toml"), &three("[\"c\"]", "[]", "[\"b\"]"))
+            .expect("valid");
+        assert_eq!(m.start_order(|_| 0), ["b", "c", "a"]);
+        // Rank decides among the free ones; `after` still wins.
+        assert_eq!(m.start_order(|n| u8::from(n != "a")), ["b", "c", "a"]);
+        let e = Manifest::parse(Path::new("m.toml"), &three("[\"c\"]", "[\"a\"]", "[\"b\"]"))
+            .expect_err("cycle")
+            .to_string();
+        assert!(
+            e.contains("cycle in `after`") && e.contains("m.toml:5"),
+            "{e}"
+        );
+        assert!(e.contains("a -> c -> b -> a"), "{e}");
+        let e = Manifest::parse(Path::new("m.toml"), &three("[\"a\"]", "[]", "[]"))
+            .expect_err("self")
+            .to_string();
+        assert!(e.contains("a -> a"), "{e}");
     }
 
     #[test]

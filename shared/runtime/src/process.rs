@@ -20,7 +20,7 @@ pub struct ProcessArgs {
     #[arg(long)]
     pub process: Option<String>,
     /// The run's namespace.
-    #[arg(long, required_unless_present = "describe")]
+    #[arg(long, required_unless_present_any = ["describe", "check"])]
     pub namespace: Option<String>,
     /// How many times the launcher has started this role in this run.
     #[arg(long, default_value_t = 0)]
@@ -34,6 +34,10 @@ pub struct ProcessArgs {
     /// Print the input and output services and types as JSON and exit.
     #[arg(long)]
     pub describe: bool,
+    /// Check this process's parameters in the manifest and exit (0: valid);
+    /// `nauta check` and `nauta launch` run it before starting anything.
+    #[arg(long, conflicts_with = "describe")]
+    pub check: bool,
 }
 
 /// Installs the tracing subscriber every nauta binary uses: compact lines on
@@ -62,7 +66,81 @@ pub fn service_main(
     describe: impl FnOnce() -> Describe,
     serve: impl FnOnce(&mut Context) -> anyhow::Result<()>,
 ) -> ExitCode {
+    service_main_checked(
+        role,
+        default_variant,
+        args,
+        describe,
+        |_: &CheckTarget| Ok(()),
+        serve,
+    )
+}
+
+/// What `--check` checks: the manifest, this process's name and its variant.
+#[derive(Debug)]
+pub struct CheckTarget {
+    /// The manifest (loaded and checked).
+    pub manifest: crate::Manifest,
+    /// This process's name in it.
+    pub process: String,
+    /// The variant that would run.
+    pub variant: String,
+}
+
+impl CheckTarget {
+    /// This process's parameters for its variant (see [`crate::Manifest::params`]).
+    pub fn params<T: serde::de::DeserializeOwned>(&self) -> anyhow::Result<T> {
+        self.manifest.params(&self.process, Some(&self.variant))
+    }
+}
+
+/// [`service_main`] with a parameter check for `--check`: `check` validates
+/// what `serve` would read from the manifest, without opening any port.
+pub fn service_main_checked(
+    role: Role,
+    default_variant: &str,
+    args: &ProcessArgs,
+    describe: impl FnOnce() -> Describe,
+    check: impl FnOnce(&CheckTarget) -> anyhow::Result<()>,
+    serve: impl FnOnce(&mut Context) -> anyhow::Result<()>,
+) -> ExitCode {
     init_tracing();
+    if args.check {
+        let target = args
+            .manifest
+            .as_deref()
+            .ok_or_else(|| anyhow::anyhow!("--check needs --manifest"))
+            .and_then(crate::Manifest::load)
+            .map(|manifest| {
+                let process = args
+                    .process
+                    .clone()
+                    .unwrap_or_else(|| role.name().to_owned());
+                let variant = args
+                    .variant
+                    .clone()
+                    .or_else(|| {
+                        manifest
+                            .processes
+                            .get(&process)
+                            .and_then(|p| p.variant.clone())
+                    })
+                    .unwrap_or_else(|| default_variant.to_owned());
+                CheckTarget {
+                    manifest,
+                    process,
+                    variant,
+                }
+            });
+        return match target.and_then(|t| check(&t)) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                // One plain line for the launcher to quote.
+                eprintln!("{e:#}");
+                ExitCode::FAILURE
+            }
+        };
+    }
     let result = if args.describe {
         describe().print()
     } else {
