@@ -112,6 +112,17 @@ pub struct Launch<'a> {
     pub standby: bool,
     /// Extra arguments from the manifest.
     pub args: &'a [String],
+    /// Warm start of a restarted or swapped-in process.
+    pub warm: Option<Warm<'a>>,
+}
+
+/// What a process restarted mid-run is handed (`--snapshot`, `--resume-after`).
+#[derive(Debug, Clone, Copy)]
+pub struct Warm<'a> {
+    /// The role's latest snapshot message, encoded, in a file.
+    pub snapshot: Option<&'a Path>,
+    /// The last output stamp seen from the role.
+    pub resume_after_ns: Option<u64>,
 }
 
 /// Starts a process in its own process group, set to receive SIGTERM if the
@@ -127,6 +138,14 @@ pub fn spawn(l: &Launch<'_>) -> anyhow::Result<Running> {
     }
     if l.standby {
         cmd.arg("--standby");
+    }
+    if let Some(w) = &l.warm {
+        if let Some(f) = w.snapshot {
+            cmd.arg("--snapshot").arg(f);
+        }
+        if let Some(t) = w.resume_after_ns {
+            cmd.args(["--resume-after", &t.to_string()]);
+        }
     }
     cmd.args(l.args).stdin(Stdio::null()).process_group(0);
     // SAFETY: prctl is async-signal-safe and touches only the calling (child) process.

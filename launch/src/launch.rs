@@ -12,8 +12,9 @@ use nauta_runtime::{
     Context, ControlClient, Describe, EventLoop, LoopExit, Manifest, Namespace, Wake, services,
 };
 
-use crate::children::{self, Launch, Running};
+use crate::children;
 use crate::monitor::{self, Observer, Tap};
+use crate::supervisor::{Outcome, Restart, Supervisor};
 
 /// Options of `nauta launch`.
 #[derive(Debug, Clone, clap::Args)]
@@ -156,6 +157,18 @@ pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<P
                 ));
             }
         }
+        if describe.is_source()
+            && let Some(r) = &p.restart
+            && r.policy != "never"
+        {
+            return Err(manifest.error_at(
+                &format!("process.{name}.restart.policy"),
+                format!(
+                    "{} is a data source: restarting it would start its data over; use \"never\"",
+                    p.bin
+                ),
+            ));
+        }
         procs.push(Proc {
             name: name.clone(),
             bin,
@@ -258,7 +271,7 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     settings.process = "launcher".into();
     settings.clock = manifest.clock();
     settings.deadline = Duration::from_millis(manifest.run.backpressure_deadline_ms);
-    let ctx = Context::new(&namespace, settings)?;
+    let mut ctx = Context::new(&namespace, settings)?;
     let (mut events, events_inbox) = ctx.subscriber(&services::run_events())?;
 
     // Taps on every output and on each process's health, opened before any
@@ -287,9 +300,8 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     // nothing yet), so they go first: their publishers are what consumers wait
     // for. Once all are ready and the launcher's own taps are connected, the
     // sources are activated: nothing is published before everyone listens.
-    let order: Vec<&Proc> = procs.iter().collect();
     let started = Instant::now();
-    let mut running: Vec<Running> = Vec::new();
+    let mut sup = Supervisor::new(&manifest_file, &run_dir, namespace.as_str());
     let mut observer = Observer::default();
     eprintln!(
         "nauta: run {namespace}: {} clock, {} s mission, seed {}",
@@ -299,38 +311,37 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     );
     let startup = (|| -> anyhow::Result<()> {
         let mut ready = std::collections::BTreeSet::new();
-        for p in &order {
+        for p in &procs {
             let section = manifest.process(&p.name)?;
             if !section.after.is_empty() {
-                wait_ready(&ctx, &mut events, &mut running, &mut ready, &section.after)?;
+                wait_ready(&ctx, &mut events, &mut sup, &mut ready, &section.after)?;
             }
-            running.push(children::spawn(&Launch {
-                bin: &p.bin,
-                name: &p.name,
-                manifest: &manifest_file,
-                namespace: namespace.as_str(),
-                instance: 0,
-                variant: section.variant.as_deref(),
-                standby: p.describe.is_source(),
-                args: &section.args,
-            })?);
+            sup.start(
+                &p.name,
+                &p.bin,
+                &p.describe,
+                section.variant.as_deref(),
+                &section.args,
+                Restart::from_section(section.restart.as_ref()),
+            )?;
         }
-        let everyone: Vec<String> = running.iter().map(|r| r.name.clone()).collect();
-        wait_ready(&ctx, &mut events, &mut running, &mut ready, &everyone)?;
+        let everyone: Vec<String> = sup.members.iter().map(|m| m.name.clone()).collect();
+        wait_ready(&ctx, &mut events, &mut sup, &mut ready, &everyone)?;
         connect_taps(&ctx, &taps)?;
-        for p in order.iter().filter(|p| p.describe.is_source()) {
+        for p in procs.iter().filter(|p| p.describe.is_source()) {
             activate(&ctx, p)?;
         }
         Ok(())
     })();
     if let Err(e) = startup {
-        stop_all(&mut running);
+        stop_all(&mut sup);
         drop((taps, inboxes, events, events_inbox));
         ctx.finish();
         let _ = std::fs::remove_dir_all(&run_dir);
         return Err(e);
     }
 
+    let mut failure = None;
     let exit = {
         let inbox_refs: Vec<&Inbox> = inboxes.iter().collect();
         EventLoop::new(Duration::from_millis(50)).run(&inbox_refs, |wake| {
@@ -339,19 +350,19 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
             }
             if wake == Wake::Tick {
                 let _ = events.drain(|_| {});
-                let mut all_done = true;
-                for r in running.iter_mut() {
-                    all_done &= r.poll();
-                }
-                if all_done {
-                    for t in taps.iter_mut() {
-                        t.drain(&mut observer)?;
+                match sup.tick(&mut ctx, &taps)? {
+                    Outcome::Running => {}
+                    Outcome::Finished => {
+                        for t in taps.iter_mut() {
+                            t.drain(&mut observer)?;
+                        }
+                        return Ok(ControlFlow::Break(()));
                     }
-                    return Ok(ControlFlow::Break(()));
-                }
-                if let Some(failed) = running.iter().find(|r| r.code().is_some_and(|c| c != 0)) {
-                    tracing::error!(process = %failed.name, code = ?failed.code(), "process failed; stopping the run");
-                    return Ok(ControlFlow::Break(()));
+                    Outcome::Failed(why) => {
+                        tracing::error!("{why}; stopping the run");
+                        failure = Some(why);
+                        return Ok(ControlFlow::Break(()));
+                    }
                 }
             }
             Ok(ControlFlow::Continue(()))
@@ -360,20 +371,27 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     if exit == LoopExit::Signal {
         eprintln!("nauta: stopping on signal");
     }
-    stop_all(&mut running);
+    stop_all(&mut sup);
     for t in taps.iter_mut() {
         t.drain(&mut observer)?;
     }
     let wall = started.elapsed();
-    let summary_line = summary(
-        &manifest,
-        &namespace,
+    let mut failures = failures(&mut sup);
+    if let Some(f) = failure
+        && !failures.contains(&f)
+    {
+        failures.insert(0, f);
+    }
+    let summary_line = summary(&Report {
+        manifest: &manifest,
+        ns: &namespace,
         wall,
-        &taps,
-        &observer,
-        &failures(&running),
+        taps: &taps,
+        obs: &observer,
+        sup: &sup,
+        failures: &failures,
         exit,
-    );
+    });
     drop(taps);
     drop(inboxes);
     drop(events);
@@ -384,25 +402,34 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     println!("{summary_line}");
     Ok(if exit == LoopExit::Signal {
         130
-    } else if failures(&running).is_empty() {
+    } else if failures.is_empty() {
         0
     } else {
         1
     })
 }
 
-fn failures(running: &[Running]) -> Vec<String> {
-    running
+/// What went wrong: processes that failed beyond their policy, and the last
+/// instance of any process that did not exit 0 in the end.
+fn failures(sup: &mut Supervisor) -> Vec<String> {
+    let mut out: Vec<String> = sup
+        .members
         .iter()
-        .filter(|r| r.code() != Some(0))
-        .map(|r| {
-            format!(
-                "{} exited {}",
-                r.name,
-                r.code().map_or("?".into(), |c| c.to_string())
-            )
-        })
-        .collect()
+        .filter_map(|m| m.failure.clone())
+        .collect();
+    for m in sup.members.iter_mut() {
+        m.child.poll();
+        let code = m.child.code();
+        let line = format!(
+            "{} exited {}",
+            m.name,
+            code.map_or("?".into(), |c| c.to_string())
+        );
+        if code != Some(0) && !out.iter().any(|f| f.starts_with(&format!("{} ", m.name))) {
+            out.push(line);
+        }
+    }
+    out
 }
 
 fn check_wiring(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
@@ -472,7 +499,7 @@ fn check_wiring(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
 fn wait_ready(
     ctx: &Context,
     events: &mut nauta_runtime::Subscriber<RunEvent>,
-    running: &mut [Running],
+    sup: &mut Supervisor,
     ready: &mut std::collections::BTreeSet<String>,
     names: &[String],
 ) -> anyhow::Result<()> {
@@ -486,7 +513,7 @@ fn wait_ready(
         if names.iter().all(|n| ready.contains(n)) {
             return Ok(());
         }
-        for r in running.iter_mut() {
+        for r in sup.children_mut() {
             if r.poll() {
                 bail!(
                     "process {} exited before it was ready (exit {:?})",
@@ -544,8 +571,9 @@ fn activate(ctx: &Context, p: &Proc) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn stop_all(running: &mut [Running]) {
-    for r in running.iter_mut().rev() {
+fn stop_all(sup: &mut Supervisor) {
+    // Reverse start order: consumers before the sources they drain.
+    for r in sup.members.iter_mut().rev().map(|m| &mut m.child) {
         if r.poll() {
             continue;
         }
@@ -562,15 +590,29 @@ fn stop_all(running: &mut [Running]) {
     }
 }
 
-fn summary(
-    manifest: &Manifest,
-    ns: &Namespace,
+/// What the summary line reports.
+struct Report<'a> {
+    manifest: &'a Manifest,
+    ns: &'a Namespace,
     wall: Duration,
-    taps: &[Box<dyn Tap>],
-    obs: &Observer,
-    failures: &[String],
+    taps: &'a [Box<dyn Tap>],
+    obs: &'a Observer,
+    sup: &'a Supervisor,
+    failures: &'a [String],
     exit: LoopExit,
-) -> String {
+}
+
+fn summary(r: &Report<'_>) -> String {
+    let Report {
+        manifest,
+        ns,
+        wall,
+        taps,
+        obs,
+        sup,
+        failures,
+        exit,
+    } = *r;
     // The sensor's own stream (the truth, else the IMU): what was simulated,
     // and over how much wall time its first and last samples arrived.
     let sensor = [TRUTH_SERVICE, IMU_SERVICE]
@@ -623,6 +665,15 @@ fn summary(
         None => parts.push("attitude error: no estimate matched a truth sample".into()),
     }
     parts.push(format!("attitude digest {:016x}", obs.digest()));
+    let restarts: Vec<String> = sup
+        .members
+        .iter()
+        .filter(|m| m.restarts > 0)
+        .map(|m| format!("{} {}", m.name, m.restarts))
+        .collect();
+    if !restarts.is_empty() {
+        parts.push(format!("restarts {}", restarts.join(", ")));
+    }
     if exit == LoopExit::Signal {
         parts.push("stopped by signal".into());
     }

@@ -8,6 +8,7 @@ mod bench;
 mod children;
 mod launch;
 mod monitor;
+mod supervisor;
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
 #[derive(Debug, Parser)]

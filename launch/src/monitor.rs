@@ -26,6 +26,9 @@ pub trait Tap {
     fn span(&self) -> Option<(u64, u64)>;
     /// Wall time from receiving the first message to receiving the last.
     fn wall_span(&self) -> Option<Duration>;
+    /// The latest message's stamp and bincode encoding, kept for snapshot
+    /// services only (the launcher hands it to a restarted process).
+    fn latest(&self) -> Option<&(u64, Vec<u8>)>;
     /// Attaches to the publishers present now; false while there is none.
     fn connect(&self) -> anyhow::Result<bool>;
 }
@@ -34,6 +37,8 @@ struct TypedTap<M: Message> {
     sub: Subscriber<M>,
     span: Option<(u64, u64)>,
     received: Option<(Instant, Instant)>,
+    keep_latest: bool,
+    latest: Option<(u64, Vec<u8>)>,
 }
 
 impl<M: Message> Tap for TypedTap<M> {
@@ -47,6 +52,14 @@ impl<M: Message> Tap for TypedTap<M> {
             self.received = Some(self.received.map_or((now, now), |(a, _)| (a, now)));
             let s = m.header().stamp_ns;
             self.span = Some(self.span.map_or((s, s), |(a, b)| (a.min(s), b.max(s))));
+            if self.keep_latest {
+                match nauta_messages::codec::encode(&m) {
+                    Ok(bytes) => self.latest = Some((s, bytes)),
+                    Err(e) => {
+                        tracing::warn!(service = %self.sub.service(), error = %e, "snapshot not kept")
+                    }
+                }
+            }
             obs.observe(self.sub.service(), &m);
             n += 1;
         }
@@ -63,6 +76,9 @@ impl<M: Message> Tap for TypedTap<M> {
     }
     fn wall_span(&self) -> Option<Duration> {
         self.received.map(|(a, b)| b - a)
+    }
+    fn latest(&self) -> Option<&(u64, Vec<u8>)> {
+        self.latest.as_ref()
     }
     fn connect(&self) -> anyhow::Result<bool> {
         Connect::connect(&self.sub)
@@ -84,6 +100,8 @@ impl MessageVisitor for MakeTap<'_> {
                     sub,
                     span: None,
                     received: None,
+                    keep_latest: self.service.ends_with("/snapshot"),
+                    latest: None,
                 }) as Box<dyn Tap>,
                 inbox,
             ))

@@ -600,8 +600,15 @@ impl EventWatch {
     /// Joins `ns` as a test process and subscribes to its run events (before
     /// starting the processes to watch: the service keeps only the last event).
     pub fn new(ns: &Namespace, deadline: Duration) -> Self {
+        Self::with_clock(ns, deadline, nauta_runtime::ClockMode::Sim)
+    }
+
+    /// [`EventWatch::new`] for a run on `clock` (a service's overflow setting
+    /// follows the clock, and every participant must agree on it).
+    pub fn with_clock(ns: &Namespace, deadline: Duration, clock: nauta_runtime::ClockMode) -> Self {
         let mut s = Context::settings(Role::Test);
         s.deadline = deadline;
+        s.clock = clock;
         let ctx = Context::new(ns, s).unwrap_or_else(|e| panic!("test context in {ns}: {e:#}"));
         let (events, _inbox) = ctx
             .subscriber(&services::run_events())

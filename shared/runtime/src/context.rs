@@ -63,6 +63,10 @@ pub struct Context {
     pub variant: String,
     /// Start in standby.
     pub standby: bool,
+    /// Warm-start snapshot file (`--snapshot`), see [`Context::warm_start`].
+    pub snapshot_file: Option<std::path::PathBuf>,
+    /// Publish nothing stamped at or before this (`--resume-after`).
+    pub resume_after_ns: Option<u64>,
     /// The manifest, when started from one.
     pub manifest: Option<Manifest>,
     /// Back-pressure deadline in `sim` mode.
@@ -118,6 +122,8 @@ impl Context {
         };
         let mut ctx = Self::new(&namespace, settings)?;
         ctx.standby = args.standby;
+        ctx.snapshot_file = args.snapshot.clone();
+        ctx.resume_after_ns = args.resume_after;
         ctx.manifest = Some(manifest);
         Ok(ctx)
     }
@@ -141,6 +147,8 @@ impl Context {
             instance: s.instance,
             variant: s.variant,
             standby: false,
+            snapshot_file: None,
+            resume_after_ns: None,
             manifest: None,
             deadline: s.deadline,
             started: Instant::now(),
@@ -304,6 +312,30 @@ impl Context {
             process: to_fixed_str(&self.process),
             variant: to_fixed_str(&self.variant),
         };
+        if let Some(p) = self.events.as_mut()
+            && let Err(e) = p.publish_now(ev)
+        {
+            tracing::warn!(error = %e, "cannot publish run event");
+        }
+    }
+
+    /// The warm-start snapshot the launcher handed over (`--snapshot`), if
+    /// any: the role's snapshot message, decoded. A file that cannot be read
+    /// or decoded is an error (the caller decides whether to start cold).
+    pub fn warm_start<M: Message>(&self) -> anyhow::Result<Option<M>> {
+        let Some(path) = &self.snapshot_file else {
+            return Ok(None);
+        };
+        let bytes = std::fs::read(path)
+            .with_context(|| format!("cannot read the snapshot {}", path.display()))?;
+        nauta_messages::codec::decode::<M>(&bytes)
+            .map(Some)
+            .map_err(|e| anyhow::anyhow!("snapshot {}: {e}", path.display()))
+    }
+
+    /// Publishes a run event about another process (the launcher's restarts,
+    /// exits and swaps).
+    pub fn publish_event(&mut self, ev: RunEvent) {
         if let Some(p) = self.events.as_mut()
             && let Err(e) = p.publish_now(ev)
         {

@@ -97,6 +97,7 @@ impl Namespace {
     pub fn remove_if_abandoned(&self, grace: Duration) -> anyhow::Result<usize> {
         let config = self.config()?;
         let report = cleanup_dead_nodes(&config)?;
+        tracing::debug!(namespace = %self, ?report, "namespace found");
         if report.alive > 0 || report.unknown > 0 || report.failed > 0 {
             return Ok(0);
         }
@@ -233,7 +234,13 @@ pub fn cleanup_dead_nodes(config: &Config) -> anyhow::Result<CleanupReport> {
     for view in dead {
         let id = *view.id();
         match view.try_remove_stale_resources() {
-            Ok(()) => report.removed += 1,
+            // Already cleaned by someone else (another process of the run
+            // cleaning at the same moment, or a cleaner that was stopped half
+            // way): the node is dead either way, and its files are the
+            // namespace's to remove.
+            Ok(()) | Err(iceoryx2::node::NodeCleanupFailure::ResourcesAlreadyCleanedUp) => {
+                report.removed += 1
+            }
             Err(e) => {
                 tracing::debug!(node = ?id, error = ?e, "dead node not removed");
                 report.failed += 1;

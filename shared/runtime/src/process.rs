@@ -31,6 +31,15 @@ pub struct ProcessArgs {
     /// Start in standby: follow the inputs without publishing (hot swap).
     #[arg(long)]
     pub standby: bool,
+    /// Warm start: the role's latest snapshot message (its bincode encoding,
+    /// as the launcher kept it), to initialise from instead of from scratch.
+    #[arg(long, value_name = "FILE")]
+    pub snapshot: Option<PathBuf>,
+    /// Publish nothing stamped at or before this (the previous instance
+    /// already did): a restarted estimator replays from its snapshot without
+    /// duplicating outputs.
+    #[arg(long, value_name = "STAMP_NS")]
+    pub resume_after: Option<u64>,
     /// Print the input and output services and types as JSON and exit.
     #[arg(long)]
     pub describe: bool,

@@ -1,0 +1,341 @@
+//! The launcher's supervision of a running pipeline (DESIGN §5): which
+//! process runs as which instance, restarts per policy with backoff and a cap,
+//! warm starts from the latest snapshot, and the run events that record it.
+//!
+//! A restart is decided when a child is found exited (the launcher polls every
+//! tick). The dead process's shared-memory resources are removed at once, so a
+//! back-pressured publisher is not held by its dead subscriber; the new
+//! instance (`--instance K+1`) gets the role's latest snapshot as a file
+//! (`--snapshot`) and the stamp of the last output the launcher saw from the
+//! role (`--resume-after`), so that it initialises from the snapshot, replays
+//! what its inputs still hold and publishes only what is new.
+
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use nauta_messages::*;
+use nauta_runtime::{Context, Describe, RestartPolicy};
+
+use crate::children::{self, Launch, Running};
+use crate::monitor::Tap;
+
+/// Restarts allowed within the window when the manifest gives no cap.
+const DEFAULT_MAX: u32 = 10;
+/// Window of the cap when the manifest gives none.
+const DEFAULT_WINDOW: Duration = Duration::from_secs(60);
+/// Backoff when the manifest gives none: first delay, longest delay.
+const DEFAULT_BACKOFF: (Duration, Duration) =
+    (Duration::from_millis(20), Duration::from_millis(1000));
+
+/// How one process is restarted.
+#[derive(Debug, Clone, Copy)]
+pub struct Restart {
+    /// When.
+    pub policy: RestartPolicy,
+    /// Most restarts within `window`.
+    pub max: u32,
+    /// Window of the cap.
+    pub window: Duration,
+    /// First and longest delay before a restart.
+    pub backoff: (Duration, Duration),
+}
+
+impl Restart {
+    /// From a manifest section (checked by `Manifest::check`).
+    pub fn from_section(r: Option<&nauta_runtime::manifest::RestartSection>) -> Self {
+        let Some(r) = r else {
+            return Self {
+                policy: RestartPolicy::Never,
+                max: DEFAULT_MAX,
+                window: DEFAULT_WINDOW,
+                backoff: DEFAULT_BACKOFF,
+            };
+        };
+        Self {
+            policy: RestartPolicy::parse(&r.policy).unwrap_or(RestartPolicy::Never),
+            max: r.max.unwrap_or(DEFAULT_MAX),
+            window: r.window_s.map_or(DEFAULT_WINDOW, Duration::from_secs_f64),
+            backoff: r.backoff_ms.map_or(DEFAULT_BACKOFF, |[a, b]| {
+                (Duration::from_millis(a), Duration::from_millis(b))
+            }),
+        }
+    }
+
+    /// Delay before the `n`-th restart within the window (1-based):
+    /// `first · 2^(n−1)`, at most `longest`.
+    pub fn delay(&self, n: u32) -> Duration {
+        let (first, longest) = self.backoff;
+        let factor = 2u32.saturating_pow(n.saturating_sub(1).min(20));
+        first.saturating_mul(factor).min(longest)
+    }
+}
+
+/// One process of the run.
+pub struct Member {
+    /// Name in the manifest.
+    pub name: String,
+    /// Its role.
+    pub role: Role,
+    bin: PathBuf,
+    /// Variant running.
+    pub variant: Option<String>,
+    args: Vec<String>,
+    /// A data source (started in standby, never restarted mid-run).
+    pub source: bool,
+    /// Data services it publishes (for `--resume-after`).
+    outputs: Vec<String>,
+    restart: Restart,
+    /// Instance running (or last run).
+    pub instance: u32,
+    /// The child.
+    pub child: Running,
+    /// When the current instance was started.
+    pub started: Instant,
+    /// Restarts so far.
+    pub restarts: u32,
+    recent: VecDeque<Instant>,
+    pending: Option<Instant>,
+    /// Why the run must stop because of this process, once decided.
+    pub failure: Option<String>,
+    settled: bool,
+}
+
+/// What a tick found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    /// The run goes on.
+    Running,
+    /// Every process has exited and none will be restarted.
+    Finished,
+    /// A process failed beyond its policy: the run stops.
+    Failed(String),
+}
+
+/// The processes of a run and their supervision.
+pub struct Supervisor {
+    /// The members, in start order.
+    pub members: Vec<Member>,
+    manifest_file: PathBuf,
+    run_dir: PathBuf,
+    namespace: String,
+}
+
+impl Supervisor {
+    /// An empty supervisor for a run.
+    pub fn new(manifest_file: &Path, run_dir: &Path, namespace: &str) -> Self {
+        Self {
+            members: Vec::new(),
+            manifest_file: manifest_file.to_owned(),
+            run_dir: run_dir.to_owned(),
+            namespace: namespace.to_owned(),
+        }
+    }
+
+    /// Starts instance 0 of a process (sources in standby).
+    #[allow(clippy::too_many_arguments)]
+    pub fn start(
+        &mut self,
+        name: &str,
+        bin: &Path,
+        describe: &Describe,
+        variant: Option<&str>,
+        args: &[String],
+        restart: Restart,
+    ) -> anyhow::Result<()> {
+        let source = describe.is_source();
+        let child = children::spawn(&Launch {
+            bin,
+            name,
+            manifest: &self.manifest_file,
+            namespace: &self.namespace,
+            instance: 0,
+            variant,
+            standby: source,
+            args,
+            warm: None,
+        })?;
+        let outputs = describe
+            .outputs
+            .iter()
+            .map(|o| o.service.clone())
+            .filter(|s| {
+                !(s.ends_with("/progress") || s.ends_with("/health") || s.ends_with("/snapshot"))
+            })
+            .collect();
+        self.members.push(Member {
+            name: name.to_owned(),
+            role: Role::from_name(&describe.role).unwrap_or(Role::Unknown),
+            bin: bin.to_owned(),
+            variant: variant.map(str::to_owned),
+            args: args.to_vec(),
+            source,
+            outputs,
+            restart,
+            instance: 0,
+            child,
+            started: Instant::now(),
+            restarts: 0,
+            recent: VecDeque::new(),
+            pending: None,
+            failure: None,
+            settled: false,
+        });
+        Ok(())
+    }
+
+    /// The children, for start-up waits and shutdown.
+    pub fn children_mut(&mut self) -> impl Iterator<Item = &mut Running> {
+        self.members.iter_mut().map(|m| &mut m.child)
+    }
+
+    /// Checks every child: reports exits, schedules and performs restarts.
+    /// `taps` (drained just before) give the latest snapshots and stamps.
+    pub fn tick(&mut self, ctx: &mut Context, taps: &[Box<dyn Tap>]) -> anyhow::Result<Outcome> {
+        // Once a source has ended its stream, the run is draining: nothing
+        // more is restarted.
+        let draining = self
+            .members
+            .iter_mut()
+            .any(|m| m.source && m.child.poll() && m.child.code() == Some(0));
+        let now = Instant::now();
+        for i in 0..self.members.len() {
+            let m = &mut self.members[i];
+            if m.settled || m.pending.is_some() || !m.child.poll() {
+                continue;
+            }
+            let code = m.child.code().unwrap_or(-1);
+            publish(ctx, event_kind::EXITED, m, code);
+            // Its shared memory goes now, not at a publisher's deadline.
+            let report = ctx.cleanup_dead_nodes();
+            tracing::debug!(?report, process = %m.name, "cleaned up after exit");
+            let wants = match m.restart.policy {
+                RestartPolicy::Never => false,
+                RestartPolicy::OnFailure => code != 0,
+                RestartPolicy::Always => true,
+            };
+            if !wants || draining || m.source {
+                m.settled = true;
+                if code != 0 {
+                    m.failure = Some(format!("{} exited {code}", m.name));
+                }
+                continue;
+            }
+            while m
+                .recent
+                .front()
+                .is_some_and(|t| now.duration_since(*t) > m.restart.window)
+            {
+                m.recent.pop_front();
+            }
+            if m.recent.len() as u32 >= m.restart.max {
+                m.settled = true;
+                m.failure = Some(format!(
+                    "{} exited {code} and was restarted {} times within {:?}",
+                    m.name, m.restart.max, m.restart.window
+                ));
+                continue;
+            }
+            m.recent.push_back(now);
+            let delay = m.restart.delay(m.recent.len() as u32);
+            tracing::warn!(process = %m.name, code, ?delay, "process exited; restarting");
+            m.pending = Some(now + delay);
+        }
+        for i in 0..self.members.len() {
+            if self.members[i].pending.is_some_and(|t| t <= now) {
+                self.restart(ctx, i, taps)?;
+            }
+        }
+        if let Some(f) = self.members.iter().find_map(|m| m.failure.clone()) {
+            return Ok(Outcome::Failed(f));
+        }
+        let done = self
+            .members
+            .iter_mut()
+            .all(|m| m.pending.is_none() && m.child.poll());
+        Ok(if done {
+            Outcome::Finished
+        } else {
+            Outcome::Running
+        })
+    }
+
+    fn restart(
+        &mut self,
+        ctx: &mut Context,
+        i: usize,
+        taps: &[Box<dyn Tap>],
+    ) -> anyhow::Result<()> {
+        let m = &mut self.members[i];
+        m.pending = None;
+        let snapshot_service = snapshot_service(m.role.name());
+        let snapshot = taps
+            .iter()
+            .find(|t| t.service() == snapshot_service)
+            .and_then(|t| t.latest());
+        let resume_after = taps
+            .iter()
+            .filter(|t| m.outputs.iter().any(|o| o == t.service()))
+            .filter_map(|t| t.span().map(|(_, last)| last))
+            .max();
+        let mut file = None;
+        if let Some((stamp, bytes)) = snapshot {
+            let path = self.run_dir.join(format!("snapshot-{}.bin", m.name));
+            std::fs::write(&path, bytes)?;
+            tracing::info!(process = %m.name, snapshot_stamp_ns = stamp, "warm start from the latest snapshot");
+            file = Some(path);
+        }
+        let instance = m.instance + 1;
+        m.child = children::spawn(&Launch {
+            bin: &m.bin,
+            name: &m.name,
+            manifest: &self.manifest_file,
+            namespace: &self.namespace,
+            instance,
+            variant: m.variant.as_deref(),
+            standby: false,
+            args: &m.args,
+            warm: Some(children::Warm {
+                snapshot: file.as_deref(),
+                resume_after_ns: resume_after,
+            }),
+        })?;
+        m.instance = instance;
+        m.restarts += 1;
+        m.started = Instant::now();
+        publish(ctx, event_kind::RESTARTED, m, 0);
+        Ok(())
+    }
+}
+
+fn publish(ctx: &mut Context, kind: u32, m: &Member, exit_code: i32) {
+    ctx.publish_event(RunEvent {
+        header: Header::new(0, 0, Role::Launcher, 0),
+        kind,
+        role: m.role as u32,
+        instance: m.instance,
+        pid: m.child.child.id(),
+        exit_code,
+        pad: 0,
+        process: to_fixed_str(&m.name),
+        variant: to_fixed_str(m.variant.as_deref().unwrap_or("")),
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backoff_doubles_up_to_the_longest() {
+        let r = Restart {
+            policy: RestartPolicy::OnFailure,
+            max: 10,
+            window: DEFAULT_WINDOW,
+            backoff: (Duration::from_millis(20), Duration::from_millis(1000)),
+        };
+        let d: Vec<u128> = (1..=8).map(|n| r.delay(n).as_millis()).collect();
+        assert_eq!(d, [20, 40, 80, 160, 320, 640, 1000, 1000]);
+        assert_eq!(r.delay(1000), Duration::from_millis(1000));
+    }
+}
