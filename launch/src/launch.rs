@@ -9,11 +9,13 @@ use anyhow::{Context as _, bail};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
 use nauta_runtime::{
-    Context, ControlClient, Describe, EventLoop, LoopExit, Manifest, Namespace, Wake, services,
+    Context, ControlClient, Describe, EventLoop, LoopExit, Manifest, Namespace, PipelineServer,
+    Wake, services,
 };
 
 use crate::children;
 use crate::monitor::{self, Observer, Tap};
+use crate::pipeline::StatusWriter;
 use crate::supervisor::{Outcome, Restart, Supervisor};
 
 /// Options of `nauta launch`.
@@ -85,7 +87,7 @@ pub fn cleanup_stale_runs() -> usize {
 }
 
 /// Where run directories (the effective manifest of each run) live.
-fn runs_dir() -> PathBuf {
+pub fn runs_dir() -> PathBuf {
     std::env::temp_dir().join("nauta")
 }
 
@@ -342,11 +344,57 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     }
 
     let mut failure = None;
+    let mut stop_requested = false;
+    let (mut pipeline, pipeline_inbox) =
+        PipelineServer::open_named(&ctx, &nauta_runtime::control::pipeline_control_name())?;
+    let mut status = StatusWriter::new(
+        &run_dir,
+        namespace.as_str(),
+        &args.manifest,
+        manifest.clock().name(),
+    );
+    status.update(&mut sup, &observer, true);
     let exit = {
-        let inbox_refs: Vec<&Inbox> = inboxes.iter().collect();
+        let mut inbox_refs: Vec<&Inbox> = inboxes.iter().collect();
+        inbox_refs.push(&pipeline_inbox);
         EventLoop::new(Duration::from_millis(50)).run(&inbox_refs, |wake| {
             for t in taps.iter_mut() {
                 t.drain(&mut observer)?;
+            }
+            let mut changed = false;
+            pipeline.serve(|req| {
+                let process = fixed_str(&req.process);
+                let variant = fixed_str(&req.variant);
+                let result = match req.command {
+                    pipeline_command::STOP => {
+                        stop_requested = true;
+                        Ok(())
+                    }
+                    pipeline_command::RESTART => sup.request_restart(&process, None),
+                    pipeline_command::SWAP => sup.request_restart(&process, Some(&variant)),
+                    _ => Err((pipeline_status::UNKNOWN_COMMAND, "unknown command".into())),
+                };
+                let (status, detail) = match result {
+                    Ok(()) => {
+                        changed = true;
+                        (pipeline_status::OK, String::new())
+                    }
+                    Err((code, why)) => (code, why),
+                };
+                tracing::info!(command = req.command, %process, %variant, status, %detail, "pipeline command");
+                PipelineResponse {
+                    header: Header::new(0, 0, Role::Launcher, 0),
+                    status,
+                    pad: 0,
+                    detail: to_fixed_str(&detail),
+                }
+            })?;
+            if stop_requested {
+                eprintln!("nauta: stopping on request (nauta stop)");
+                return Ok(ControlFlow::Break(()));
+            }
+            if wake == Wake::Tick || changed {
+                status.update(&mut sup, &observer, changed);
             }
             if wake == Wake::Tick {
                 let _ = events.drain(|_| {});
@@ -391,11 +439,13 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
         sup: &sup,
         failures: &failures,
         exit,
+        stopped_by_request: stop_requested,
     });
     drop(taps);
     drop(inboxes);
     drop(events);
     drop(events_inbox);
+    drop((pipeline, pipeline_inbox));
     ctx.finish();
     let _ = std::fs::remove_dir_all(&run_dir);
 
@@ -600,6 +650,7 @@ struct Report<'a> {
     sup: &'a Supervisor,
     failures: &'a [String],
     exit: LoopExit,
+    stopped_by_request: bool,
 }
 
 fn summary(r: &Report<'_>) -> String {
@@ -612,6 +663,7 @@ fn summary(r: &Report<'_>) -> String {
         sup,
         failures,
         exit,
+        stopped_by_request,
     } = *r;
     // The sensor's own stream (the truth, else the IMU): what was simulated,
     // and over how much wall time its first and last samples arrived.
@@ -676,6 +728,9 @@ fn summary(r: &Report<'_>) -> String {
     }
     if exit == LoopExit::Signal {
         parts.push("stopped by signal".into());
+    }
+    if stopped_by_request {
+        parts.push("stopped by request".into());
     }
     if failures.is_empty() {
         parts.push("all processes exited 0".into());

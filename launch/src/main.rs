@@ -8,6 +8,7 @@ mod bench;
 mod children;
 mod launch;
 mod monitor;
+mod pipeline;
 mod supervisor;
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
@@ -25,6 +26,39 @@ enum Command {
     /// Validate a manifest without starting anything: schema and values, the
     /// binaries and their variants, the wiring (`nauta check launch/survey.toml`).
     Check(launch::LaunchArgs),
+    /// Processes of the running pipeline: pid, variant, state, uptime, restarts, rates, losses.
+    Status {
+        /// Print one JSON object (`{"processes": [...]}`).
+        #[arg(long)]
+        json: bool,
+        /// The run to show, when several are running.
+        #[arg(long)]
+        namespace: Option<String>,
+    },
+    /// Stop the running pipeline in order (as Ctrl-C in its shell would).
+    Stop {
+        /// The run to stop, when several are running.
+        #[arg(long)]
+        namespace: Option<String>,
+    },
+    /// Restart one process of the running pipeline (warm, from its latest snapshot).
+    Restart {
+        /// Process name in the manifest.
+        process: String,
+        /// The run, when several are running.
+        #[arg(long)]
+        namespace: Option<String>,
+    },
+    /// Swap one process of the running pipeline for another variant.
+    Swap {
+        /// Process name in the manifest.
+        process: String,
+        /// Variant to run instead.
+        variant: String,
+        /// The run, when several are running.
+        #[arg(long)]
+        namespace: Option<String>,
+    },
     /// Benchmarks (use a release build).
     Bench {
         #[command(subcommand)]
@@ -71,6 +105,34 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Launch(args) => launch::run(&args).map(ExitCode::from),
         Command::Check(args) => launch::check(&args).map(|()| ExitCode::SUCCESS),
+        Command::Status { json, namespace } => {
+            pipeline::status(json, namespace.as_deref()).map(|()| ExitCode::SUCCESS)
+        }
+        Command::Stop { namespace } => pipeline::command(
+            namespace.as_deref(),
+            nauta_messages::pipeline_command::STOP,
+            "",
+            "",
+        )
+        .map(|()| ExitCode::SUCCESS),
+        Command::Restart { process, namespace } => pipeline::command(
+            namespace.as_deref(),
+            nauta_messages::pipeline_command::RESTART,
+            &process,
+            "",
+        )
+        .map(|()| ExitCode::SUCCESS),
+        Command::Swap {
+            process,
+            variant,
+            namespace,
+        } => pipeline::command(
+            namespace.as_deref(),
+            nauta_messages::pipeline_command::SWAP,
+            &process,
+            &variant,
+        )
+        .map(|()| ExitCode::SUCCESS),
         Command::Bench { which } => match which {
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),

@@ -140,7 +140,15 @@ pub struct Observer {
     max_total: f64,
     digest: u64,
     health: std::collections::BTreeMap<String, (u64, u64)>,
+    /// Per health service: the previous and the latest message, with the
+    /// time each arrived (rates for `nauta status`).
+    pub latest_health: std::collections::BTreeMap<String, HealthPair>,
 }
+
+/// A health message and when it arrived.
+pub type TimedHealth = (Instant, Health);
+/// The previous (if any) and the latest health message of a process.
+pub type HealthPair = (Option<TimedHealth>, TimedHealth);
 
 const TRUTH: usize = 0;
 const ATTITUDE: usize = 1;
@@ -155,6 +163,7 @@ impl Default for Observer {
             max_total: 0.0,
             digest: 0xcbf2_9ce4_8422_2325,
             health: Default::default(),
+            latest_health: Default::default(),
         }
     }
 }
@@ -182,6 +191,10 @@ impl Observer {
         } else if let Some(h) = msg.downcast_ref::<Health>() {
             self.health
                 .insert(service.to_owned(), (h.dropped, h.rejected));
+            let now = Instant::now();
+            let prev = self.latest_health.remove(service).map(|(_, last)| last);
+            self.latest_health
+                .insert(service.to_owned(), (prev, (now, *h)));
         } else if let Some(p) = msg.downcast_ref::<Progress>()
             && p.header.is_end_of_stream()
         {

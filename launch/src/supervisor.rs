@@ -92,13 +92,28 @@ pub struct Member {
     pub child: Running,
     /// When the current instance was started.
     pub started: Instant,
-    /// Restarts so far.
+    /// Restarts so far (policy or `nauta restart`).
     pub restarts: u32,
+    /// Swaps so far.
+    pub swaps: u32,
     recent: VecDeque<Instant>,
     pending: Option<Instant>,
     /// Why the run must stop because of this process, once decided.
     pub failure: Option<String>,
     settled: bool,
+    /// Variants its binary implements.
+    pub variants: Vec<String>,
+    /// A restart or swap asked from another shell: on the next exit, start
+    /// again at once (with this variant, if a swap), whatever the policy.
+    forced: Option<Option<String>>,
+    swapping: bool,
+}
+
+impl Member {
+    /// Whether a restart is scheduled or asked for.
+    pub fn restarting(&self) -> bool {
+        self.pending.is_some() || self.forced.is_some()
+    }
 }
 
 /// What a tick found.
@@ -167,7 +182,9 @@ impl Supervisor {
             name: name.to_owned(),
             role: Role::from_name(&describe.role).unwrap_or(Role::Unknown),
             bin: bin.to_owned(),
-            variant: variant.map(str::to_owned),
+            variant: variant
+                .map(str::to_owned)
+                .or_else(|| describe.variants.first().cloned()),
             args: args.to_vec(),
             source,
             outputs,
@@ -176,11 +193,43 @@ impl Supervisor {
             child,
             started: Instant::now(),
             restarts: 0,
+            swaps: 0,
             recent: VecDeque::new(),
             pending: None,
             failure: None,
             settled: false,
+            variants: describe.variants.clone(),
+            forced: None,
+            swapping: false,
         });
+        Ok(())
+    }
+
+    /// `nauta restart P` (`variant` None) or `nauta swap P V`: stops the
+    /// process (SIGTERM) and starts it again at once, warm, whatever its
+    /// policy. Err explains a refusal.
+    pub fn request_restart(
+        &mut self,
+        name: &str,
+        variant: Option<&str>,
+    ) -> Result<(), (u32, String)> {
+        let m = self.members.iter_mut().find(|m| m.name == name).ok_or((
+            pipeline_status::UNKNOWN_PROCESS,
+            format!("no process {name}"),
+        ))?;
+        if let Some(v) = variant
+            && !m.variants.iter().any(|x| x == v)
+        {
+            return Err((pipeline_status::UNKNOWN_VARIANT, format!("no variant {v}")));
+        }
+        if m.source {
+            return Err((pipeline_status::REFUSED, format!("{name} is a source")));
+        }
+        if m.settled || m.forced.is_some() || m.pending.is_some() || m.child.poll() {
+            return Err((pipeline_status::REFUSED, format!("{name} is not running")));
+        }
+        m.forced = Some(variant.map(str::to_owned));
+        m.child.terminate();
         Ok(())
     }
 
@@ -209,6 +258,14 @@ impl Supervisor {
             // Its shared memory goes now, not at a publisher's deadline.
             let report = ctx.cleanup_dead_nodes();
             tracing::debug!(?report, process = %m.name, "cleaned up after exit");
+            if let Some(variant) = m.forced.take() {
+                if let Some(v) = variant {
+                    m.variant = Some(v);
+                    m.swapping = true;
+                }
+                m.pending = Some(now);
+                continue;
+            }
             let wants = match m.restart.policy {
                 RestartPolicy::Never => false,
                 RestartPolicy::OnFailure => code != 0,
@@ -301,9 +358,14 @@ impl Supervisor {
             }),
         })?;
         m.instance = instance;
-        m.restarts += 1;
         m.started = Instant::now();
-        publish(ctx, event_kind::RESTARTED, m, 0);
+        if std::mem::take(&mut m.swapping) {
+            m.swaps += 1;
+            publish(ctx, event_kind::SWAPPED, m, 0);
+        } else {
+            m.restarts += 1;
+            publish(ctx, event_kind::RESTARTED, m, 0);
+        }
         Ok(())
     }
 }

@@ -206,3 +206,127 @@ fn kill_9_of_the_launcher_leaves_no_process_and_the_next_launch_cleans_up() {
         "files of the killed launcher's run remain after the next launch: {remaining:?} (left: {left:?})\n{out}"
     );
 }
+
+fn nauta(args: &[&str]) -> (Option<i32>, String, String) {
+    let out = std::process::Command::new(bin("nauta"))
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run nauta");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Issue 4: a running pipeline is controlled from another shell: `status`
+/// lists its processes, `restart` restarts one, `swap` refuses an unknown
+/// variant, `stop` ends the run in order and leaves nothing behind.
+#[test]
+fn status_restart_swap_and_stop_from_another_shell() {
+    bin_dir();
+    let wd = Watchdog::new("pipeline_control", BOUND);
+    let ns = Namespace::unique();
+    let config = ns.config().expect("config");
+    let mut launch = start_launch(
+        &wd,
+        &[
+            "--clock",
+            "wall",
+            "--duration",
+            "120",
+            "--namespace",
+            ns.as_str(),
+        ],
+    );
+    // `status` finds the run once it is registered and both processes run.
+    let mut status = serde_json::Value::Null;
+    while !status["processes"]
+        .as_array()
+        .is_some_and(|p| p.len() == 2 && p.iter().all(|p| p["state"] == "running"))
+    {
+        wd.check();
+        assert!(
+            launch.is_running(),
+            "the run ended early\n{}",
+            launch.wait(&wd)
+        );
+        std::thread::sleep(Duration::from_millis(100));
+        let (code, out, _) = nauta(&["status", "--json", "--namespace", ns.as_str()]);
+        if code == Some(0) {
+            status = serde_json::from_str(&out).expect("status JSON");
+        }
+    }
+    let procs = status["processes"].as_array().expect("processes");
+    for key in [
+        "name",
+        "pid",
+        "variant",
+        "state",
+        "restarts",
+        "uptime_s",
+        "inputs_per_s",
+        "outputs_per_s",
+        "rejected",
+        "dropped",
+    ] {
+        assert!(procs[0].get(key).is_some(), "status lacks {key}: {status}");
+    }
+    let attitude = procs
+        .iter()
+        .find(|p| p["name"] == "attitude")
+        .expect("attitude");
+    let old_pid = attitude["pid"].as_u64().expect("pid");
+    assert!(old_pid > 0 && !gone(old_pid as u32));
+    // The readable form works too.
+    let (code, out, err) = nauta(&["status", "--namespace", ns.as_str()]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.contains("attitude") && out.contains("sensor"), "{out}");
+
+    let (code, _, err) = nauta(&["restart", "attitude", "--namespace", ns.as_str()]);
+    assert_eq!(code, Some(0), "restart refused: {err}");
+    loop {
+        wd.check();
+        std::thread::sleep(Duration::from_millis(100));
+        let (_, out, _) = nauta(&["status", "--json", "--namespace", ns.as_str()]);
+        let Ok(s) = serde_json::from_str::<serde_json::Value>(&out) else {
+            continue;
+        };
+        let a = s["processes"]
+            .as_array()
+            .and_then(|p| p.iter().find(|p| p["name"] == "attitude").cloned())
+            .expect("attitude");
+        if a["restarts"] == 1 && a["state"] == "running" {
+            assert_ne!(a["pid"].as_u64(), Some(old_pid), "{s}");
+            assert_eq!(a["instance"], 1, "{s}");
+            break;
+        }
+    }
+    let (code, _, err) = nauta(&[
+        "swap",
+        "attitude",
+        "no-such-variant",
+        "--namespace",
+        ns.as_str(),
+    ]);
+    assert_eq!(code, Some(1), "an unknown variant was accepted");
+    assert!(err.contains("no-such-variant"), "{err}");
+    let (code, _, err) = nauta(&["restart", "sensor", "--namespace", ns.as_str()]);
+    assert_eq!(code, Some(1), "a source was restarted");
+    assert!(err.contains("source"), "{err}");
+
+    let (code, _, err) = nauta(&["stop", "--namespace", ns.as_str()]);
+    assert_eq!(code, Some(0), "stop refused: {err}");
+    let out = launch.wait(&wd);
+    assert_eq!(out.code(), Some(0), "{out}");
+    let s = out.summary();
+    assert!(s.line.contains("stopped by request"), "{}", s.line);
+    assert!(s.line.contains("restarts attitude 1"), "{}", s.line);
+    assert!(
+        ns.all_files(&config).is_empty(),
+        "the stopped run left files"
+    );
+    let (code, _, _) = nauta(&["status", "--namespace", ns.as_str()]);
+    assert_eq!(code, Some(1), "status still finds the stopped run");
+}

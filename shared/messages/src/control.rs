@@ -177,3 +177,60 @@ message! {
         pub last_stamp_ns: u64,
     }
 }
+
+/// Commands in [`PipelineRequest::command`] (`nauta stop|restart|swap`).
+pub mod pipeline_command {
+    /// Stop the whole run in order (as SIGINT would).
+    pub const STOP: u32 = 1;
+    /// Restart one process (warm start from its latest snapshot).
+    pub const RESTART: u32 = 2;
+    /// Swap one process for another variant.
+    pub const SWAP: u32 = 3;
+}
+
+/// Answers in [`PipelineResponse::status`].
+pub mod pipeline_status {
+    /// Done (or started: a swap completes asynchronously).
+    pub const OK: u32 = 0;
+    /// No process of that name in the run.
+    pub const UNKNOWN_PROCESS: u32 = 1;
+    /// The process's binary does not implement that variant.
+    pub const UNKNOWN_VARIANT: u32 = 2;
+    /// Not possible for this process now (a source, the run is ending, ...).
+    pub const REFUSED: u32 = 3;
+    /// Unknown command.
+    pub const UNKNOWN_COMMAND: u32 = 4;
+}
+
+message! {
+    /// A command from another shell to the launcher of a running pipeline
+    /// (`launcher/control/0`).
+    #[wire(type_name = "nauta.PipelineRequest.v1", size = 96)]
+    pub struct PipelineRequest {
+        /// Common header.
+        pub header: Header,
+        /// [`pipeline_command`] value.
+        pub command: u32,
+        /// Zero.
+        pub pad: u32,
+        /// Process name in the manifest, NUL-padded (restart, swap).
+        pub process: [u8; 32],
+        /// Variant to swap to, NUL-padded.
+        pub variant: [u8; 24],
+    }
+}
+
+message! {
+    /// The launcher's answer to a [`PipelineRequest`].
+    #[wire(type_name = "nauta.PipelineResponse.v1", size = 72)]
+    pub struct PipelineResponse {
+        /// Common header.
+        pub header: Header,
+        /// [`pipeline_status`] value.
+        pub status: u32,
+        /// Zero.
+        pub pad: u32,
+        /// A short explanation, NUL-padded.
+        pub detail: [u8; 32],
+    }
+}

@@ -108,6 +108,8 @@ registry!(
     RunEvent,
     ControlRequest,
     ControlResponse,
+    PipelineRequest,
+    PipelineResponse,
 );
 
 /// Descriptions of every registered type.

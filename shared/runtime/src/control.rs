@@ -8,7 +8,10 @@ use std::time::{Duration, Instant};
 use iceoryx2::port::client::Client;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::server::Server;
-use nauta_messages::{ControlRequest, ControlResponse, Role, control_service};
+use nauta_messages::{
+    ControlRequest, ControlResponse, Message, PipelineRequest, PipelineResponse, Role,
+    control_service,
+};
 
 use crate::Ipc;
 use crate::context::{Context, service_name};
@@ -20,26 +23,26 @@ pub fn control_name(role: Role, instance: u32) -> String {
     format!("{}/{instance}", control_service(role.name()))
 }
 
-type ReqRes = iceoryx2::service::port_factory::request_response::PortFactory<
-    Ipc,
-    ControlRequest,
-    (),
-    ControlResponse,
-    (),
->;
+/// The launcher's own control service, for `nauta stop|restart|swap`.
+pub fn pipeline_control_name() -> String {
+    control_name(Role::Launcher, 0)
+}
 
-fn open(
+type ReqRes<Req, Res> =
+    iceoryx2::service::port_factory::request_response::PortFactory<Ipc, Req, (), Res, ()>;
+
+fn open<Req: Message, Res: Message>(
     ctx: &Context,
     name: &str,
 ) -> anyhow::Result<(
-    ReqRes,
+    ReqRes<Req, Res>,
     iceoryx2::service::port_factory::event::PortFactory<Ipc>,
 )> {
     let sn = service_name(name)?;
     let rr = ctx
         .node
         .service_builder(&sn)
-        .request_response::<ControlRequest, ControlResponse>()
+        .request_response::<Req, Res>()
         .max_servers(2)
         .max_clients(4)
         .max_nodes(MAX_NODES)
@@ -58,13 +61,18 @@ fn open(
 }
 
 /// The serving side, in the controlled process.
-pub struct ControlServer {
-    _service: ReqRes,
-    server: Server<Ipc, ControlRequest, (), ControlResponse, ()>,
+pub struct ControlServer<Req: Message = ControlRequest, Res: Message = ControlResponse> {
+    _service: ReqRes<Req, Res>,
+    server: Server<Ipc, Req, (), Res, ()>,
     name: String,
 }
 
-impl std::fmt::Debug for ControlServer {
+/// The launcher's server for `nauta stop|restart|swap`.
+pub type PipelineServer = ControlServer<PipelineRequest, PipelineResponse>;
+/// The client of [`PipelineServer`].
+pub type PipelineClient = ControlClient<PipelineRequest, PipelineResponse>;
+
+impl<Req: Message, Res: Message> std::fmt::Debug for ControlServer<Req, Res> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ControlServer")
             .field("service", &self.name)
@@ -75,8 +83,15 @@ impl std::fmt::Debug for ControlServer {
 impl ControlServer {
     /// Opens this process's control service and the inbox that wakes on requests.
     pub fn open(ctx: &Context) -> anyhow::Result<(Self, Inbox)> {
-        let name = control_name(ctx.role, ctx.instance);
-        let (rr, ev) = open(ctx, &name)?;
+        Self::open_named(ctx, &control_name(ctx.role, ctx.instance))
+    }
+}
+
+impl<Req: Message, Res: Message> ControlServer<Req, Res> {
+    /// Opens the control service `name` and the inbox that wakes on requests.
+    pub fn open_named(ctx: &Context, name: &str) -> anyhow::Result<(Self, Inbox)> {
+        let name = name.to_owned();
+        let (rr, ev) = open::<Req, Res>(ctx, &name)?;
         let server = rr
             .server_builder()
             .create()
@@ -98,7 +113,7 @@ impl ControlServer {
     /// Answers every pending request with `handle`; returns how many.
     pub fn serve(
         &mut self,
-        mut handle: impl FnMut(&ControlRequest) -> ControlResponse,
+        mut handle: impl FnMut(&Req) -> Res,
     ) -> anyhow::Result<usize> {
         let mut n = 0;
         while let Some(active) = self
@@ -117,14 +132,14 @@ impl ControlServer {
 }
 
 /// The commanding side (the launcher, `nauta restart|swap|stop`).
-pub struct ControlClient {
-    _service: ReqRes,
-    client: Client<Ipc, ControlRequest, (), ControlResponse, ()>,
+pub struct ControlClient<Req: Message = ControlRequest, Res: Message = ControlResponse> {
+    _service: ReqRes<Req, Res>,
+    client: Client<Ipc, Req, (), Res, ()>,
     notifier: Notifier<Ipc>,
     name: String,
 }
 
-impl std::fmt::Debug for ControlClient {
+impl<Req: Message, Res: Message> std::fmt::Debug for ControlClient<Req, Res> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ControlClient")
             .field("service", &self.name)
@@ -135,8 +150,15 @@ impl std::fmt::Debug for ControlClient {
 impl ControlClient {
     /// Opens the control service of process `role`/`instance`.
     pub fn open(ctx: &Context, role: Role, instance: u32) -> anyhow::Result<Self> {
-        let name = control_name(role, instance);
-        let (rr, ev) = open(ctx, &name)?;
+        Self::open_named(ctx, &control_name(role, instance))
+    }
+}
+
+impl<Req: Message, Res: Message> ControlClient<Req, Res> {
+    /// Opens the control service `name`.
+    pub fn open_named(ctx: &Context, name: &str) -> anyhow::Result<Self> {
+        let name = name.to_owned();
+        let (rr, ev) = open::<Req, Res>(ctx, &name)?;
         let client = rr
             .client_builder()
             .create()
@@ -157,9 +179,9 @@ impl ControlClient {
     pub fn request(
         &self,
         ctx: &Context,
-        request: ControlRequest,
+        request: Req,
         timeout: Duration,
-    ) -> anyhow::Result<ControlResponse> {
+    ) -> anyhow::Result<Res> {
         let pending = self
             .client
             .send_copy(request)

@@ -22,7 +22,7 @@ pub mod services;
 
 pub use clock::{ClockMode, Pacer};
 pub use context::Context;
-pub use control::{ControlClient, ControlServer};
+pub use control::{ControlClient, ControlServer, PipelineClient, PipelineServer};
 pub use describe::{Describe, PortDescription};
 pub use event_loop::{EventLoop, LoopExit, Wake};
 pub use health::HealthReporter;
