@@ -60,7 +60,7 @@ impl<M: Message> ServiceSpec<M> {
         ServiceSpec {
             name: name.to_owned(),
             buffer,
-            history: 0,
+            history: history_for(buffer),
             max_publishers: MAX_PUBLISHERS,
             delivery: Delivery::ByClock,
             _m: PhantomData,
@@ -88,6 +88,17 @@ impl<M: Message> ServiceSpec<M> {
 const FAST: usize = 256;
 /// Queue length for ≤ 10 Hz streams.
 const SLOW: usize = 64;
+
+/// Samples a data service keeps for a subscriber that joins late: a process
+/// restarted (or swapped in) mid-run warm-starts from its last snapshot (1 Hz)
+/// and replays its inputs from there, so the history covers a little over
+/// 2 s at 100 Hz (and 6 s at 10 Hz): a snapshot period plus the restart.
+fn history_for(buffer: usize) -> usize {
+    match buffer {
+        FAST => 220,
+        _ => 60,
+    }
+}
 
 /// `sensor/imu`.
 pub fn imu() -> ServiceSpec<ImuSample> {
