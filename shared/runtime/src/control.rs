@@ -111,10 +111,7 @@ impl<Req: Message, Res: Message> ControlServer<Req, Res> {
     }
 
     /// Answers every pending request with `handle`; returns how many.
-    pub fn serve(
-        &mut self,
-        mut handle: impl FnMut(&Req) -> Res,
-    ) -> anyhow::Result<usize> {
+    pub fn serve(&mut self, mut handle: impl FnMut(&Req) -> Res) -> anyhow::Result<usize> {
         let mut n = 0;
         while let Some(active) = self
             .server
@@ -176,12 +173,7 @@ impl<Req: Message, Res: Message> ControlClient<Req, Res> {
     }
 
     /// Sends `request` and waits up to `timeout` for the answer.
-    pub fn request(
-        &self,
-        ctx: &Context,
-        request: Req,
-        timeout: Duration,
-    ) -> anyhow::Result<Res> {
+    pub fn request(&self, ctx: &Context, request: Req, timeout: Duration) -> anyhow::Result<Res> {
         let pending = self
             .client
             .send_copy(request)
