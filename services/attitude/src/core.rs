@@ -1,14 +1,33 @@
 //! The attitude role's pure core: static alignment from the first still samples,
 //! then one [`AttitudeEstimator`] variant. No IPC here; `main` wires it to ports.
+//!
+//! - `gyro`: [`GyroIntegrator`] from the aligned attitude with zero bias (paper
+//!   000's unaided baseline).
+//! - `mekf`: [`Mekf`] from the aligned attitude; during the alignment the core
+//!   also averages the gyro, and if it was still (the spread of its samples
+//!   about their mean below `still_gyro_rms_deg_s`) takes that mean, less the
+//!   Earth rate seen at the aligned attitude, as the initial bias, with a 1σ of
+//!   `√(N²/T + B²)` (white noise N averaged over the T seconds of alignment,
+//!   plus the bias instability B). Otherwise the bias starts at zero with the
+//!   configured `initial_bias_std_deg_s` and the attitude with the larger
+//!   `moving_alignment_*_std_deg`. The expected field norm and dip come
+//!   from the alignment's mean field ([`MagneticReference::from_mean_field`]).
+//!   Then each IMU sample is one `predict` and one `update` (no decimation).
 
+use nalgebra::Vector3;
 use serde::Deserialize;
 
 use nauta_estimation::alignment::Alignment;
-use nauta_estimation::{AttitudeEstimator, AttitudeOutput, GyroIntegrator};
+use nauta_estimation::earth::earth_rate_ned;
+use nauta_estimation::mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
+use nauta_estimation::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot, GyroIntegrator};
 use nauta_messages::checked::Imu;
 
+#[cfg(test)]
+mod tests;
+
 /// The variants this binary implements; the first is the default.
-pub const VARIANTS: [&str; 1] = ["gyro"];
+pub const VARIANTS: [&str; 2] = ["gyro", "mekf"];
 
 /// Parameters of the `gyro` variant (`[process.attitude.variants.gyro]` over
 /// `[process.attitude.params]`).
@@ -28,37 +47,176 @@ impl Default for GyroParams {
     }
 }
 
+/// Parameters of the `mekf` variant (`variants.mekf = { alignment_samples = 400,
+/// filter = { mag_norm_gate = 0.2 } }`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MekfVariantParams {
+    /// Samples averaged for the initial alignment (as the `gyro` variant).
+    pub alignment_samples: usize,
+    /// The alignment counts as still, and its mean gyro as the initial bias, when
+    /// the RMS of the gyro samples about their mean (norm over the three axes) is
+    /// below this, °/s. Default 1 (our choice: the MTi-30's white noise gives
+    /// 0.52 °/s at 100 Hz; a hand-rocked or wave-rocked IMU gives tens).
+    pub still_gyro_rms_deg_s: f64,
+    /// Initial roll and pitch 1σ, degrees, when the alignment was not still (its
+    /// means then average a moving attitude). Default 20 (our choice: the
+    /// amplitude of paper 000's rocking motion).
+    pub moving_alignment_tilt_std_deg: f64,
+    /// Initial heading 1σ, degrees, when the alignment was not still. Default 30
+    /// (our choice).
+    pub moving_alignment_heading_std_deg: f64,
+    /// The filter's parameters.
+    pub filter: MekfParams,
+}
+
+impl Default for MekfVariantParams {
+    fn default() -> Self {
+        Self {
+            alignment_samples: 200,
+            still_gyro_rms_deg_s: 1.0,
+            moving_alignment_tilt_std_deg: 20.0,
+            moving_alignment_heading_std_deg: 30.0,
+            filter: MekfParams::default(),
+        }
+    }
+}
+
+/// A variant's parameters.
+#[derive(Debug, Clone)]
+pub enum VariantParams {
+    /// `gyro`.
+    Gyro(GyroParams),
+    /// `mekf`.
+    Mekf(MekfVariantParams),
+}
+
+/// The checked form of [`VariantParams`].
+#[derive(Debug, Clone, Copy)]
+enum Variant {
+    Gyro,
+    Mekf {
+        config: MekfConfig,
+        still_gyro_rms_rad_s: f64,
+        moving_tilt_std_rad: f64,
+        moving_heading_std_rad: f64,
+    },
+}
+
+/// Running mean and spread of the gyro during the alignment (Welford).
+#[derive(Debug, Clone, Default)]
+struct GyroMean {
+    count: u64,
+    mean: Vector3<f64>,
+    /// Sum of squared deviations from the mean, all axes.
+    m2: f64,
+    duration_s: f64,
+}
+
+impl GyroMean {
+    fn push(&mut self, gyro: &Vector3<f64>, interval_s: f64) {
+        self.count += 1;
+        let delta = gyro - self.mean;
+        self.mean += delta / self.count as f64;
+        self.m2 += delta.dot(&(gyro - self.mean));
+        self.duration_s += interval_s;
+    }
+
+    /// RMS norm of the deviations from the mean.
+    fn rms(&self) -> f64 {
+        (self.m2 / self.count.max(1) as f64).sqrt()
+    }
+}
+
+/// One running estimator.
+#[derive(Debug)]
+enum Estimator {
+    Gyro(GyroIntegrator),
+    Mekf(Box<Mekf>),
+}
+
+impl Estimator {
+    fn get(&self) -> &dyn AttitudeEstimator {
+        match self {
+            Estimator::Gyro(g) => g,
+            Estimator::Mekf(m) => m.as_ref(),
+        }
+    }
+
+    fn get_mut(&mut self) -> &mut dyn AttitudeEstimator {
+        match self {
+            Estimator::Gyro(g) => g,
+            Estimator::Mekf(m) => m.as_mut(),
+        }
+    }
+}
+
 /// Where the estimator is in its life.
 #[derive(Debug)]
 enum Phase {
-    Aligning(Alignment),
-    Running(Box<GyroIntegrator>),
+    Aligning(Alignment, GyroMean),
+    Running(Estimator),
 }
 
-/// Alignment then gyro integration.
+/// Alignment then one estimator variant.
 #[derive(Debug)]
 pub struct AttitudeCore {
     phase: Phase,
+    variant: Variant,
     latitude_rad: f64,
+    declination_rad: f64,
     alignment_samples: usize,
 }
 
 impl AttitudeCore {
-    /// A core for the `gyro` variant at the site's latitude and declination.
+    /// A core for the variant of `params` at the site's latitude and declination.
     pub fn new(
-        params: &GyroParams,
+        params: &VariantParams,
         latitude_rad: f64,
         declination_rad: f64,
     ) -> anyhow::Result<Self> {
-        let alignment_samples = params.alignment_samples.max(1);
+        let (alignment_samples, variant) = match params {
+            VariantParams::Gyro(p) => (p.alignment_samples, Variant::Gyro),
+            VariantParams::Mekf(p) => {
+                anyhow::ensure!(
+                    p.still_gyro_rms_deg_s >= 0.0 && p.still_gyro_rms_deg_s.is_finite(),
+                    "still_gyro_rms_deg_s = {} is not a non-negative number",
+                    p.still_gyro_rms_deg_s
+                );
+                for (name, v) in [
+                    (
+                        "moving_alignment_tilt_std_deg",
+                        p.moving_alignment_tilt_std_deg,
+                    ),
+                    (
+                        "moving_alignment_heading_std_deg",
+                        p.moving_alignment_heading_std_deg,
+                    ),
+                ] {
+                    anyhow::ensure!(v > 0.0 && v <= 180.0, "{name} = {v} is not in (0, 180]");
+                }
+                (
+                    p.alignment_samples,
+                    Variant::Mekf {
+                        config: MekfConfig::try_from(&p.filter)?,
+                        still_gyro_rms_rad_s: p.still_gyro_rms_deg_s.to_radians(),
+                        moving_tilt_std_rad: p.moving_alignment_tilt_std_deg.to_radians(),
+                        moving_heading_std_rad: p.moving_alignment_heading_std_deg.to_radians(),
+                    },
+                )
+            }
+        };
+        let alignment_samples = alignment_samples.max(1);
         let alignment = Alignment::new(declination_rad, alignment_samples)?;
         anyhow::ensure!(
             latitude_rad.abs() <= std::f64::consts::FRAC_PI_2,
             "latitude out of range"
         );
         Ok(AttitudeCore {
-            phase: Phase::Aligning(alignment),
+            phase: Phase::Aligning(alignment, GyroMean::default()),
+            variant,
             latitude_rad,
+            declination_rad,
             alignment_samples,
         })
     }
@@ -66,30 +224,38 @@ impl AttitudeCore {
     /// Processes one checked IMU sample; returns the estimate once aligned.
     pub fn step(&mut self, imu: &Imu) -> anyhow::Result<Option<AttitudeOutput>> {
         match &mut self.phase {
-            Phase::Aligning(a) => {
+            Phase::Aligning(a, gyro) => {
                 a.push(&imu.accel_m_s2, &imu.mag_ut)?;
+                gyro.push(&imu.gyro_rad_s, imu.interval_s);
                 if a.count() >= self.alignment_samples {
-                    let q = a.finish()?;
-                    let g = GyroIntegrator::new(q, self.latitude_rad, imu.stamp_ns)?;
-                    let out = g.estimate();
-                    self.phase = Phase::Running(Box::new(g));
+                    let est = start(
+                        self.variant,
+                        self.latitude_rad,
+                        self.declination_rad,
+                        a,
+                        gyro,
+                        imu.stamp_ns,
+                    )?;
+                    let out = est.get().estimate();
+                    self.phase = Phase::Running(est);
                     return Ok(Some(out));
                 }
                 Ok(None)
             }
-            Phase::Running(g) => {
-                g.predict(&imu.gyro_rad_s, imu.interval_s);
-                g.update(&imu.accel_m_s2, &imu.mag_ut);
-                Ok(Some(g.estimate()))
+            Phase::Running(est) => {
+                let e = est.get_mut();
+                e.predict(&imu.gyro_rad_s, imu.interval_s);
+                e.update(&imu.accel_m_s2, &imu.mag_ut);
+                Ok(Some(e.estimate()))
             }
         }
     }
 
     /// The estimator's snapshot, once aligned.
-    pub fn snapshot(&self) -> Option<nauta_estimation::AttitudeStateSnapshot> {
+    pub fn snapshot(&self) -> Option<AttitudeStateSnapshot> {
         match &self.phase {
-            Phase::Running(g) => Some(g.snapshot()),
-            Phase::Aligning(_) => None,
+            Phase::Running(est) => Some(est.get().snapshot()),
+            Phase::Aligning(..) => None,
         }
     }
 
@@ -97,4 +263,61 @@ impl AttitudeCore {
     pub fn is_aligned(&self) -> bool {
         matches!(self.phase, Phase::Running(_))
     }
+}
+
+/// The estimator that follows the alignment.
+fn start(
+    variant: Variant,
+    latitude_rad: f64,
+    declination_rad: f64,
+    a: &Alignment,
+    gyro: &GyroMean,
+    stamp_ns: u64,
+) -> anyhow::Result<Estimator> {
+    let q = a.finish()?;
+    let (config, still_rms, moving_tilt_std, moving_heading_std) = match variant {
+        Variant::Gyro => {
+            return Ok(Estimator::Gyro(GyroIntegrator::new(
+                q,
+                latitude_rad,
+                stamp_ns,
+            )?));
+        }
+        Variant::Mekf {
+            config,
+            still_gyro_rms_rad_s,
+            moving_tilt_std_rad,
+            moving_heading_std_rad,
+        } => (
+            config,
+            still_gyro_rms_rad_s,
+            moving_tilt_std_rad,
+            moving_heading_std_rad,
+        ),
+    };
+    let mean_mag = a
+        .mean_magnetic_field()
+        .ok_or_else(|| anyhow::anyhow!("alignment finished without samples"))?;
+    let reference = MagneticReference::from_mean_field(&q, &mean_mag)?;
+    let mut mekf = Mekf::new(&config, q, latitude_rad, declination_rad, reference)?;
+    let still = gyro.rms() <= still_rms && gyro.duration_s > 0.0;
+    if still {
+        let earth_b = q.inverse_transform_vector(&earth_rate_ned(latitude_rad));
+        let bias = gyro.mean - earth_b;
+        let std = (config.gyro_noise_rad_rt_s().powi(2) / gyro.duration_s
+            + config.gyro_bias_instability_rad_s().powi(2))
+        .sqrt();
+        mekf = mekf.with_initial_bias(bias, std)?;
+    } else {
+        mekf = mekf.with_initial_attitude_std(moving_tilt_std, moving_heading_std)?;
+    }
+    tracing::info!(
+        still,
+        gyro_rms_deg_s = gyro.rms().to_degrees(),
+        bias_deg_h = ?mekf.gyro_bias().map(|b| b.to_degrees() * 3600.0),
+        field_ut = reference.field_ut(),
+        dip_deg = reference.dip_rad().to_degrees(),
+        "aligned; mekf starts"
+    );
+    Ok(Estimator::Mekf(Box::new(mekf)))
 }

@@ -18,7 +18,7 @@ use nauta_runtime::{
 
 mod core;
 
-use crate::core::{AttitudeCore, GyroParams, VARIANTS};
+use crate::core::{AttitudeCore, VARIANTS, VariantParams};
 
 /// Estimates the vehicle's attitude from the IMU.
 #[derive(Debug, Parser)]
@@ -56,7 +56,10 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         "unknown attitude variant {:?}; this binary implements {VARIANTS:?}",
         ctx.variant
     );
-    let params: GyroParams = ctx.params()?;
+    let params = match ctx.variant.as_str() {
+        "mekf" => VariantParams::Mekf(ctx.params()?),
+        _ => VariantParams::Gyro(ctx.params()?),
+    };
     let site = ctx
         .manifest()?
         .site

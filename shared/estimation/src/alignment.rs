@@ -120,6 +120,18 @@ impl Alignment {
         self.count
     }
 
+    /// Mean specific force of the samples so far (m/s², FRD), `None` before the
+    /// first sample.
+    pub fn mean_specific_force(&self) -> Option<Vector3<f64>> {
+        (self.count > 0).then(|| self.sum_f_b / self.count as f64)
+    }
+
+    /// Mean magnetic field of the samples so far (µT, FRD), `None` before the
+    /// first sample.
+    pub fn mean_magnetic_field(&self) -> Option<Vector3<f64>> {
+        (self.count > 0).then(|| self.sum_m_b / self.count as f64)
+    }
+
     /// Forgets every sample (keeps the declination and the minimum).
     pub fn reset(&mut self) {
         self.count = 0;
@@ -299,10 +311,13 @@ mod tests {
             Err(AlignmentPushError::NonFinite)
         );
         assert_eq!(a.count(), 1);
+        assert_eq!(a.mean_specific_force(), Some(f));
+        assert_eq!(a.mean_magnetic_field(), Some(m));
         a.push(&f, &m).expect("finite");
         assert!(a.finish().is_ok());
         a.reset();
         assert_eq!(a.count(), 0);
+        assert_eq!(a.mean_magnetic_field(), None);
 
         // No horizontal field: zero, or straight down.
         let mut a = Alignment::new(0.0, 1).expect("valid");

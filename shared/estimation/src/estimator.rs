@@ -44,6 +44,10 @@ pub enum AttitudeRestoreError {
     /// The quaternion's norm is not within [`AttitudeStateSnapshot::MAX_NORM_ERROR`] of 1.
     #[error("snapshot quaternion has norm {0}, not 1")]
     NotUnit(f64),
+    /// The covariance is not symmetric with a positive diagonal (an estimator
+    /// that uses it refuses it; all zeros means "unknown").
+    #[error("snapshot covariance is not symmetric with a positive diagonal")]
+    NotCovariance,
 }
 
 impl AttitudeStateSnapshot {

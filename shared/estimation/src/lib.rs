@@ -13,6 +13,8 @@
 //! - [`alignment`]: static coarse alignment from accelerometer and magnetometer.
 //! - [`estimator`]: the [`AttitudeEstimator`] role trait and its snapshot.
 //! - [`gyro`]: pure gyro integration, paper 000's baseline.
+//! - [`mekf`]: multiplicative extended Kalman filter for attitude and gyro bias,
+//!   aided by gravity and magnetic heading.
 //! - [`strapdown`]: free strapdown inertial navigation on the WGS84 ellipsoid.
 //!
 //! Equations name the paper (`../shared/papers/`, by number) or the textbook
@@ -25,10 +27,12 @@ pub mod attitude;
 pub mod earth;
 pub mod estimator;
 pub mod gyro;
+pub mod mekf;
 pub mod strapdown;
 
 pub use alignment::Alignment;
 pub use attitude::{AttitudeError, HeadingInclinationError};
 pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot};
 pub use gyro::{GyroIntegrator, GyroState};
+pub use mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
 pub use strapdown::{Strapdown, StrapdownError, StrapdownState};
