@@ -6,7 +6,11 @@
 
 use std::time::{Duration, Instant};
 
-use nauta_messages::{AttitudeEstimate, RunEvent, event_kind, fixed_str};
+use std::collections::BTreeMap;
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nauta_messages::{AttitudeEstimate, RunEvent, TruthState, event_kind, fixed_str};
+use nauta_runtime::ports::Inbox;
 use nauta_runtime::{ClockMode, Namespace, Subscriber, services};
 use nauta_tests::*;
 
@@ -34,24 +38,179 @@ fn ready_pids(events: &mut Subscriber<RunEvent>, seen: &mut Vec<(String, u32, u3
         .unwrap_or_else(|e| panic!("run/events: {e:#}"));
 }
 
+/// An estimate and the truth at its stamp.
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    stamp_ns: u64,
+    instance: u32,
+    /// Attitude error against the truth, as a rotation vector in NED (the
+    /// frame of the estimate's `std_rad`), rad.
+    error_ned: Vector3<f64>,
+    std_ned: Vector3<f64>,
+}
+
+/// Follows `attitude/estimate` and `sim/truth` of a wall-clock run.
+struct Follower {
+    estimates: Subscriber<AttitudeEstimate>,
+    truth: Subscriber<TruthState>,
+    _inboxes: (Inbox, Inbox),
+    truths: BTreeMap<u64, UnitQuaternion<f64>>,
+    pending: Vec<AttitudeEstimate>,
+    samples: Vec<Sample>,
+}
+
+fn quat(q: [f64; 4]) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+}
+
+impl Follower {
+    fn new(watch: &EventWatch) -> Self {
+        let (estimates, a) = watch
+            .ctx
+            .subscriber(&services::attitude_estimate())
+            .expect("attitude/estimate");
+        let (truth, b) = watch.ctx.subscriber(&services::truth()).expect("sim/truth");
+        Self {
+            estimates,
+            truth,
+            _inboxes: (a, b),
+            truths: BTreeMap::new(),
+            pending: Vec::new(),
+            samples: Vec::new(),
+        }
+    }
+
+    /// Takes what arrived; pairs estimates with the truth of their stamp.
+    fn poll(&mut self) {
+        let truths = &mut self.truths;
+        self.truth
+            .drain(|t| {
+                truths.insert(t.header.stamp_ns, quat(t.quat_nb));
+            })
+            .expect("truth");
+        let pending = &mut self.pending;
+        self.estimates
+            .drain(|e| pending.push(e))
+            .expect("estimates");
+        let mut keep = Vec::new();
+        for e in self.pending.drain(..) {
+            match self.truths.get(&e.header.stamp_ns) {
+                Some(t) => {
+                    let d = quat(e.quat_nb) * t.inverse();
+                    self.samples.push(Sample {
+                        stamp_ns: e.header.stamp_ns,
+                        instance: e.header.instance,
+                        error_ned: d.scaled_axis(),
+                        std_ned: Vector3::from(e.std_rad),
+                    });
+                }
+                None => keep.push(e),
+            }
+        }
+        self.pending = keep;
+        // Keep a few seconds of truth.
+        while self.truths.len() > 2000 {
+            self.truths.pop_first();
+        }
+    }
+
+    fn last_of(&self, instance: u32) -> Option<Sample> {
+        self.samples
+            .iter()
+            .rev()
+            .find(|s| s.instance == instance)
+            .copied()
+    }
+
+    fn first_of(&self, instance: u32) -> Option<Sample> {
+        self.samples
+            .iter()
+            .find(|s| s.instance == instance)
+            .copied()
+    }
+}
+
+/// Checks that instance `new` took over from `old` seamlessly: every stamp
+/// exactly once (the first new stamp is the last old one plus one IMU
+/// interval), and the estimate continues within 3σ: its error against the
+/// truth changed by at most 3σ on each axis (a cold start would re-converge).
+fn assert_seamless(f: &Follower, old: u32, new: u32) {
+    let before = f.last_of(old).expect("estimates before the switch");
+    let after = f.first_of(new).expect("estimates after the switch");
+    assert_eq!(
+        after.stamp_ns,
+        before.stamp_ns + 10_000_000,
+        "instance {new} starts at {} after instance {old} ended at {}: stamps lost or repeated",
+        after.stamp_ns,
+        before.stamp_ns
+    );
+    let mut stamps: Vec<u64> = f.samples.iter().map(|s| s.stamp_ns).collect();
+    let n = stamps.len();
+    stamps.dedup();
+    assert_eq!(stamps.len(), n, "a stamp was published twice");
+    assert!(
+        stamps.windows(2).all(|w| w[1] > w[0]),
+        "stamps go backwards"
+    );
+    for axis in 0..3 {
+        let jump = (after.error_ned[axis] - before.error_ned[axis]).abs();
+        let sigma = after.std_ned[axis];
+        assert!(
+            sigma > 0.0,
+            "instance {new} publishes no uncertainty: {after:?}"
+        );
+        assert!(
+            jump <= 3.0 * sigma,
+            "axis {axis}: the error jumped by {:.4}° at the switch, more than 3σ = {:.4}°\nbefore {before:?}\nafter {after:?}",
+            jump.to_degrees(),
+            3.0 * sigma.to_degrees()
+        );
+    }
+    // Roll and pitch (north and east axes) are consistent with the truth.
+    for axis in 0..2 {
+        assert!(
+            after.error_ned[axis].abs() <= 3.0 * after.std_ned[axis],
+            "axis {axis}: first estimate after the switch off the truth by more than 3σ: {after:?}"
+        );
+    }
+}
+
+fn wall_watch(ns: &Namespace) -> EventWatch {
+    EventWatch::with_clock(
+        ns,
+        Duration::from_millis(500),
+        ClockMode::Wall { rate: 1.0 },
+    )
+}
+
+/// Waits until the follower has estimates of `instance` stamped after `t_ns`.
+fn follow_until(wd: &Watchdog, launch: &mut Running, f: &mut Follower, instance: u32, t_ns: u64) {
+    while !f
+        .samples
+        .iter()
+        .any(|s| s.instance == instance && s.stamp_ns >= t_ns)
+    {
+        wd.check();
+        assert!(
+            launch.is_running(),
+            "the run ended before instance {instance} published past {t_ns} ns"
+        );
+        f.poll();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 #[test]
-fn kill_9_of_an_estimator_restarts_it_and_the_rest_keeps_running() {
+fn kill_9_of_an_estimator_restarts_it_warm_and_the_rest_keeps_running() {
     bin_dir();
     let wd = Watchdog::new("estimator_restart", BOUND);
     let ns = Namespace::unique();
-    let watch = EventWatch::with_clock(
-        &ns,
-        Duration::from_millis(500),
-        ClockMode::Wall { rate: 1.0 },
-    );
+    let watch = wall_watch(&ns);
     let (mut events, events_inbox) = watch
         .ctx
         .subscriber(&services::run_events())
         .expect("run/events");
-    let (mut estimates, estimates_inbox): (Subscriber<AttitudeEstimate>, _) = watch
-        .ctx
-        .subscriber(&services::attitude_estimate())
-        .expect("attitude/estimate");
+    let mut follower = Follower::new(&watch);
     let mut launch = start_launch(
         &wd,
         &[
@@ -62,29 +221,15 @@ fn kill_9_of_an_estimator_restarts_it_and_the_rest_keeps_running() {
             "--namespace",
             ns.as_str(),
             "--set",
+            "attitude.variant=mekf",
+            "--set",
             "attitude.restart={ policy = \"on-failure\", max = 3, window_s = 60, backoff_ms = [20, 500] }",
         ],
     );
+    // Running, aligned, and past a few snapshots.
+    follow_until(&wd, &mut launch, &mut follower, 0, 9_000_000_000);
     let mut seen = Vec::new();
-    // Running: estimates from instance 0 (after its alignment).
-    let mut last0 = None;
-    while last0.is_none_or(|s: u64| s < 8_000_000_000) {
-        wd.check();
-        assert!(
-            launch.is_running(),
-            "the run ended early\n{}",
-            launch.wait(&wd)
-        );
-        ready_pids(&mut events, &mut seen);
-        estimates
-            .drain(|e| {
-                if e.header.instance == 0 {
-                    last0 = Some(e.header.stamp_ns);
-                }
-            })
-            .expect("estimates");
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    ready_pids(&mut events, &mut seen);
     let pid = seen
         .iter()
         .find(|(n, _, i)| n == "attitude" && *i == 0)
@@ -95,35 +240,22 @@ fn kill_9_of_an_estimator_restarts_it_and_the_rest_keeps_running() {
         libc::kill(pid as i32, libc::SIGKILL);
     }
     let killed = Instant::now();
-    // Restarted and publishing again: an estimate from instance 1.
-    let mut first1 = None;
-    while first1.is_none() {
-        wd.check();
-        assert!(
-            launch.is_running(),
-            "the run ended before the restart\n{}",
-            launch.wait(&wd)
-        );
-        estimates
-            .drain(|e| {
-                if e.header.instance == 1 && first1.is_none() {
-                    first1 = Some(e.header.stamp_ns);
-                }
-            })
-            .expect("estimates");
-        std::thread::sleep(Duration::from_millis(2));
-    }
+    follow_until(&wd, &mut launch, &mut follower, 1, 0);
     eprintln!(
         "restart to first output: {:.0} ms after kill -9 (benchmark target: 1 s)",
         killed.elapsed().as_secs_f64() * 1e3
     );
+    // A few more seconds of the new instance, then the checks.
+    let resumed = follower.first_of(1).expect("instance 1").stamp_ns;
+    follow_until(&wd, &mut launch, &mut follower, 1, resumed + 2_000_000_000);
+    assert_seamless(&follower, 0, 1);
     ready_pids(&mut events, &mut seen);
     assert!(
         seen.iter()
             .any(|(n, p, i)| n == "attitude" && *i == 1 && *p != pid),
         "no READY from the restarted attitude: {seen:?}"
     );
-    drop((estimates, events, estimates_inbox, events_inbox));
+    drop((follower, events, events_inbox));
     let out = launch.wait(&wd);
     watch.finish();
     assert_eq!(out.code(), Some(0), "the run failed\n{out}");
@@ -134,6 +266,79 @@ fn kill_9_of_an_estimator_restarts_it_and_the_rest_keeps_running() {
     assert_eq!(s.count("sensor/imu"), Some(2500), "{}", s.line);
     assert_eq!(s.gaps(), Some(0), "{}", s.line);
     assert!(s.line.contains("lost in processes 0"), "{}", s.line);
+}
+
+/// Issue 4: `nauta swap attitude mekf` and back during a wall run: every
+/// stamp reaches the consumer exactly once across each switch, and the
+/// estimate continues within 3σ.
+#[test]
+fn swap_to_another_variant_and_back_is_seamless() {
+    bin_dir();
+    let wd = Watchdog::new("swap", BOUND);
+    let ns = Namespace::unique();
+    let watch = wall_watch(&ns);
+    let mut follower = Follower::new(&watch);
+    let mut launch = start_launch(
+        &wd,
+        &[
+            "--clock",
+            "wall",
+            "--duration",
+            "30",
+            "--namespace",
+            ns.as_str(),
+            "--set",
+            "attitude.variant=mekf",
+        ],
+    );
+    follow_until(&wd, &mut launch, &mut follower, 0, 8_000_000_000);
+    // The first swap goes to another instance of the same filter family so
+    // that the uncertainty check applies on both sides: mekf -> gyro carries
+    // the attitude (gyro publishes no uncertainty), gyro -> mekf restores it.
+    for (variant, instance) in [("gyro", 1u32), ("mekf", 2)] {
+        let mut tries = 0;
+        loop {
+            let (code, _, err) = nauta(&["swap", "attitude", variant, "--namespace", ns.as_str()]);
+            if code == Some(0) {
+                break;
+            }
+            // Refused while the previous swap is still starting.
+            tries += 1;
+            assert!(tries < 100, "swap to {variant} refused: {err}");
+            wd.check();
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let resumed_from = follower.samples.last().map_or(0, |s| s.stamp_ns);
+        follow_until(
+            &wd,
+            &mut launch,
+            &mut follower,
+            instance,
+            resumed_from + 2_000_000_000,
+        );
+    }
+    let before = follower.last_of(0).expect("mekf before");
+    let gyro_first = follower.first_of(1).expect("gyro");
+    assert_eq!(
+        gyro_first.stamp_ns,
+        before.stamp_ns + 10_000_000,
+        "stamps lost or repeated at the swap to gyro"
+    );
+    // gyro carries the attitude without an uncertainty: compare its first
+    // error with mekf's last against mekf's 3σ.
+    for axis in 0..3 {
+        let jump = (gyro_first.error_ned[axis] - before.error_ned[axis]).abs();
+        assert!(
+            jump <= 3.0 * before.std_ned[axis],
+            "axis {axis}: jump {jump} at the swap to gyro; before {before:?} after {gyro_first:?}"
+        );
+    }
+    assert_seamless(&follower, 1, 2);
+    drop(follower);
+    let out = launch.wait(&wd);
+    watch.finish();
+    assert_eq!(out.code(), Some(0), "{out}");
+    assert_eq!(out.summary().gaps(), Some(0), "{}", out.summary().line);
 }
 
 #[test]

@@ -155,6 +155,9 @@ impl Estimator {
 #[derive(Debug)]
 enum Phase {
     Aligning(Alignment, GyroMean),
+    /// Warm start: the estimator is built from this snapshot, valid after the
+    /// sample stamped `.1`, at the first sample after it.
+    Restoring(Box<AttitudeStateSnapshot>, u64),
     Running(Estimator),
 }
 
@@ -221,9 +224,41 @@ impl AttitudeCore {
         })
     }
 
+    /// Starts warm instead of aligning: the estimator continues from
+    /// `snapshot`, the state after the sample stamped `stamp_ns` (a previous
+    /// instance's, handed over by the launcher). Samples up to that stamp are
+    /// skipped; the next one builds the estimator and is processed. A snapshot
+    /// that fails its checks is refused and the core keeps aligning.
+    pub fn warm_start(
+        &mut self,
+        snapshot: AttitudeStateSnapshot,
+        stamp_ns: u64,
+    ) -> anyhow::Result<()> {
+        snapshot
+            .checked()
+            .map_err(|e| anyhow::anyhow!("snapshot refused: {e}"))?;
+        self.phase = Phase::Restoring(Box::new(snapshot), stamp_ns);
+        Ok(())
+    }
+
     /// Processes one checked IMU sample; returns the estimate once aligned.
     pub fn step(&mut self, imu: &Imu) -> anyhow::Result<Option<AttitudeOutput>> {
+        if let Phase::Restoring(snapshot, after) = &self.phase {
+            if imu.stamp_ns <= *after {
+                return Ok(None);
+            }
+            let est = restore(
+                self.variant,
+                self.latitude_rad,
+                self.declination_rad,
+                snapshot,
+                *after,
+                imu,
+            )?;
+            self.phase = Phase::Running(est);
+        }
         match &mut self.phase {
+            Phase::Restoring(..) => Ok(None),
             Phase::Aligning(a, gyro) => {
                 a.push(&imu.accel_m_s2, &imu.mag_ut)?;
                 gyro.push(&imu.gyro_rad_s, imu.interval_s);
@@ -255,7 +290,7 @@ impl AttitudeCore {
     pub fn snapshot(&self) -> Option<AttitudeStateSnapshot> {
         match &self.phase {
             Phase::Running(est) => Some(est.get().snapshot()),
-            Phase::Aligning(..) => None,
+            Phase::Aligning(..) | Phase::Restoring(..) => None,
         }
     }
 
@@ -263,6 +298,41 @@ impl AttitudeCore {
     pub fn is_aligned(&self) -> bool {
         matches!(self.phase, Phase::Running(_))
     }
+}
+
+/// The estimator of a warm start: the variant's estimator at the snapshot's
+/// attitude with the snapshot's state. The `mekf` takes its magnetic
+/// reference (field norm and dip) from the first sample's field seen at the
+/// snapshot's attitude, since the snapshot does not carry it.
+fn restore(
+    variant: Variant,
+    latitude_rad: f64,
+    declination_rad: f64,
+    snapshot: &AttitudeStateSnapshot,
+    stamp_ns: u64,
+    first: &Imu,
+) -> anyhow::Result<Estimator> {
+    let (q, _) = snapshot
+        .checked()
+        .map_err(|e| anyhow::anyhow!("snapshot refused: {e}"))?;
+    let mut est = match variant {
+        Variant::Gyro => Estimator::Gyro(GyroIntegrator::new(q, latitude_rad, stamp_ns)?),
+        Variant::Mekf { config, .. } => {
+            let reference = MagneticReference::from_mean_field(&q, &first.mag_ut)?;
+            Estimator::Mekf(Box::new(Mekf::new(
+                &config,
+                q,
+                latitude_rad,
+                declination_rad,
+                reference,
+            )?))
+        }
+    };
+    est.get_mut()
+        .restore(snapshot)
+        .map_err(|e| anyhow::anyhow!("snapshot refused: {e}"))?;
+    tracing::info!(stamp_ns, "warm start from the snapshot");
+    Ok(est)
 }
 
 /// The estimator that follows the alignment.

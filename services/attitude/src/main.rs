@@ -10,15 +10,16 @@ use anyhow::Context as _;
 use clap::Parser;
 use nauta_messages::checked::{Imu, StampOrder};
 use nauta_messages::*;
-use nauta_runtime::process::{ProcessArgs, service_main};
+use nauta_runtime::process::{ProcessArgs, service_main_checked};
 use nauta_runtime::{
-    Context, ControlServer, Describe, EventLoop, HealthReporter, LoopExit, OrderedMerge,
+    Context, ControlServer, Describe, EventLoop, HealthReporter, LoopExit, Manifest, OrderedMerge,
     PortDescription, Wake, services,
 };
 
 mod core;
 
 use crate::core::{AttitudeCore, VARIANTS, VariantParams};
+use nauta_estimation::AttitudeStateSnapshot;
 
 /// Estimates the vehicle's attitude from the IMU.
 #[derive(Debug, Parser)]
@@ -47,28 +48,66 @@ fn describe() -> Describe {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    service_main(Role::Attitude, VARIANTS[0], &args.process, describe, serve)
+    service_main_checked(
+        Role::Attitude,
+        VARIANTS[0],
+        &args.process,
+        describe,
+        |t| {
+            core_for(&t.manifest, &t.process, &t.variant)?;
+            Ok(())
+        },
+        serve,
+    )
 }
 
-fn serve(ctx: &mut Context) -> anyhow::Result<()> {
+/// The core of `variant` with its parameters from the manifest (what
+/// `--check` validates).
+fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result<AttitudeCore> {
     anyhow::ensure!(
-        VARIANTS.contains(&ctx.variant.as_str()),
-        "unknown attitude variant {:?}; this binary implements {VARIANTS:?}",
-        ctx.variant
+        VARIANTS.contains(&variant),
+        "unknown attitude variant {variant:?}; this binary implements {VARIANTS:?}"
     );
-    let params = match ctx.variant.as_str() {
-        "mekf" => VariantParams::Mekf(ctx.params()?),
-        _ => VariantParams::Gyro(ctx.params()?),
+    let params = match variant {
+        "mekf" => VariantParams::Mekf(manifest.params(process, Some(variant))?),
+        _ => VariantParams::Gyro(manifest.params(process, Some(variant))?),
     };
-    let site = ctx
-        .manifest()?
-        .site
-        .context("the manifest has no [site]: the attitude needs the latitude and declination")?;
-    let mut core = AttitudeCore::new(
+    let site = manifest.site.with_context(|| {
+        format!(
+            "{}: the manifest has no [site]: the attitude needs the latitude and declination",
+            manifest.path.display()
+        )
+    })?;
+    AttitudeCore::new(
         &params,
         site.latitude_deg.to_radians(),
         site.magnetic_declination_deg.to_radians(),
-    )?;
+    )
+    .with_context(|| format!("{}: process.{process}", manifest.path.display()))
+}
+
+fn serve(ctx: &mut Context) -> anyhow::Result<()> {
+    let mut core = core_for(ctx.manifest()?, &ctx.process, &ctx.variant)?;
+
+    // A restarted or swapped-in instance continues from the role's latest
+    // snapshot (the launcher hands it over) instead of aligning again.
+    match ctx.warm_start::<AttitudeSnapshot>() {
+        Ok(Some(s)) => {
+            let state = AttitudeStateSnapshot {
+                q: s.quat_nb,
+                gyro_bias: s.gyro_bias_rad_s,
+                covariance: s.covariance,
+                calibration: s.calibration,
+            };
+            if let Err(e) = core.warm_start(state, s.header.stamp_ns) {
+                tracing::warn!(error = %e, "starting cold");
+            }
+        }
+        Ok(None) => {}
+        Err(e) => tracing::warn!(error = %e, "snapshot unreadable; starting cold"),
+    }
+    // Estimates up to this stamp were published by the previous instance.
+    let resume_after = ctx.resume_after_ns;
 
     let (mut imu_in, imu_inbox) = ctx.subscriber(&services::imu())?;
     let (mut sensor_progress, progress_inbox) =
@@ -93,11 +132,12 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     let mut merge: OrderedMerge<Imu> = OrderedMerge::new(1);
     let mut order = StampOrder::default();
     let mut last_stamp = 0u64;
+    let mut next_snapshot_ns = 0u64;
 
     let exit = EventLoop::new(Duration::from_secs(1)).run(
         &[&imu_inbox, &progress_inbox, &control_inbox],
         |wake| {
-            let mut snapshot_now = wake == Wake::Tick;
+            let mut snapshot_now = false;
             control.serve(|req| {
                 let status = match req.command {
                     command::SNAPSHOT_NOW => {
@@ -118,15 +158,8 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                     last_stamp_ns: last_stamp,
                 }
             })?;
-            if snapshot_now && let Some(s) = core.snapshot() {
-                snapshot_out.publish_now(AttitudeSnapshot {
-                    header: Header::new(last_stamp, 0, Role::Attitude, ctx.instance),
-                    quat_nb: s.q,
-                    gyro_bias_rad_s: s.gyro_bias,
-                    covariance: s.covariance,
-                    calibration: s.calibration,
-                    pad: 0,
-                })?;
+            if snapshot_now {
+                publish_snapshot(&core, &mut snapshot_out, last_stamp)?;
             }
             if wake == Wake::Tick {
                 health.dropped = imu_in.gaps().missing + estimate_out.given_up();
@@ -172,7 +205,16 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
             while let Some((_, stamp, imu)) = merge.pop() {
                 last_stamp = stamp;
                 health.last_stamp_ns = stamp;
-                if let Some(out) = core.step(&imu)? {
+                let out = core.step(&imu)?;
+                // A snapshot at every whole second of the run's clock.
+                if stamp >= next_snapshot_ns {
+                    next_snapshot_ns = (stamp / SNAPSHOT_PERIOD_NS + 1) * SNAPSHOT_PERIOD_NS;
+                    publish_snapshot(&core, &mut snapshot_out, stamp)?;
+                }
+                if resume_after.is_some_and(|r| stamp <= r) {
+                    continue;
+                }
+                if let Some(out) = out {
                     let calibration = if core.is_aligned() {
                         calibration::ALIGNED
                     } else {
@@ -212,5 +254,28 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         by_signal = exit == LoopExit::Signal,
         "done"
     );
+    Ok(())
+}
+
+/// Snapshot period in the run's clock (DESIGN §4: 1 Hz).
+const SNAPSHOT_PERIOD_NS: u64 = 1_000_000_000;
+
+/// Publishes the estimator's state after the sample stamped `stamp_ns` (nothing
+/// while it aligns).
+fn publish_snapshot(
+    core: &AttitudeCore,
+    out: &mut nauta_runtime::Publisher<AttitudeSnapshot>,
+    stamp_ns: u64,
+) -> anyhow::Result<()> {
+    if let Some(s) = core.snapshot() {
+        out.publish_now(AttitudeSnapshot {
+            header: Header::new(stamp_ns, 0, Role::Attitude, 0),
+            quat_nb: s.q,
+            gyro_bias_rad_s: s.gyro_bias,
+            covariance: s.covariance,
+            calibration: s.calibration,
+            pad: 0,
+        })?;
+    }
     Ok(())
 }
