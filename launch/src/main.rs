@@ -81,6 +81,9 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Kill a random estimator every 5-15 s of a wall-clock survey at 10x; restarts,
+    /// latencies, losses and the attitude error beside a run without kills.
+    Chaos(bench::chaos::ChaosArgs),
     /// Simulator speed: the scenarios generated in-process, all sensors, one core.
     Sim {
         /// Print one JSON object instead of a table.
@@ -136,6 +139,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Bench { which } => match which {
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),
         },
         Command::IpcPeer { args } => bench::ipc::peer(&args).map(|()| ExitCode::SUCCESS),
     }

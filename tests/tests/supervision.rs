@@ -535,3 +535,57 @@ fn status_restart_swap_and_stop_from_another_shell() {
     let (code, _, _) = nauta(&["status", "--namespace", ns.as_str()]);
     assert_eq!(code, Some(1), "status still finds the stopped run");
 }
+
+/// Issue 4, the short version of `nauta bench chaos` that CI runs: a few kills
+/// of the estimator during a 30 s wall-clock run at 10x; every kill is
+/// restarted, nothing is lost, and the attitude error stays within 10 % of
+/// the run without kills. (The full survey with 20+ kills is the benchmark.)
+#[test]
+fn chaos_short_version() {
+    bin_dir();
+    let wd = Watchdog::new("chaos_short", BOUND);
+    let (code, out, err) = {
+        let child = std::process::Command::new(bin("nauta"))
+            .current_dir(workspace_root())
+            .args([
+                "bench",
+                "chaos",
+                "--json",
+                "--duration",
+                "300",
+                "--rate",
+                "10",
+                "--min-interval",
+                "4",
+                "--max-interval",
+                "8",
+            ])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("nauta bench chaos");
+        wd.watch(child.id());
+        let o = child.wait_with_output().expect("wait");
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    assert_eq!(code, Some(0), "{out}\n{err}");
+    let r: serde_json::Value = serde_json::from_str(out.trim()).expect("one JSON object");
+    let kills = r["kills"].as_u64().expect("kills");
+    assert!(kills >= 3, "{r}");
+    assert_eq!(r["restarts"].as_u64(), Some(kills), "{r}");
+    assert_eq!(r["every_kill_restarted"], true, "{r}");
+    assert_eq!(r["restart_latencies_measured"].as_u64(), Some(kills), "{r}");
+    assert_eq!(r["lost_messages"].as_u64(), Some(0), "{r}");
+    assert!(
+        r["metric_change_pct"].as_f64().is_some_and(|c| c < 10.0),
+        "{r}"
+    );
+    for key in ["restart_p50_ms", "restart_max_ms"] {
+        assert!(r[key].as_f64().is_some_and(f64::is_finite), "{key}: {r}");
+    }
+}

@@ -1,4 +1,5 @@
 //! `nauta bench ...`: benchmarks that print figures (JSON with `--json`).
 
+pub mod chaos;
 pub mod ipc;
 pub mod sim;
