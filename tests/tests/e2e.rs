@@ -164,8 +164,18 @@ fn side_by_side_runs_are_isolated() {
 /// Criterion 3: A run stopped with SIGTERM leaves no file of its run in /dev/shm.
 #[test]
 fn sigterm_leaves_no_shared_memory() {
+    stop_by_signal_leaves_no_shared_memory(libc::SIGTERM, "SIGTERM");
+}
+
+/// Issue 4: the same after SIGINT (Ctrl-C in the launcher's shell).
+#[test]
+fn sigint_leaves_no_shared_memory() {
+    stop_by_signal_leaves_no_shared_memory(libc::SIGINT, "SIGINT");
+}
+
+fn stop_by_signal_leaves_no_shared_memory(signal: i32, name: &str) {
     bin_dir();
-    let wd = Watchdog::new("sigterm_leaves_no_shared_memory", BOUND);
+    let wd = Watchdog::new(&format!("{name}_leaves_no_shared_memory"), BOUND);
     let ns = Namespace::unique();
     // Joins the run only to see its processes report ready; leaves before the stop.
     let mut watch = EventWatch::new(&ns, Duration::from_millis(500));
@@ -204,12 +214,12 @@ fn sigterm_leaves_no_shared_memory() {
         run.wait(&wd)
     );
 
-    run.signal(libc::SIGTERM);
+    run.signal(signal);
     let out = run.wait(&wd);
     assert_eq!(
         out.code(),
         Some(130),
-        "nauta launch stopped by SIGTERM should exit 130\n{out}"
+        "nauta launch stopped by {name} should exit 130\n{out}"
     );
 
     // Processes may finish removing their files just after they exit.
@@ -217,7 +227,7 @@ fn sigterm_leaves_no_shared_memory() {
     let config = ns.config().expect("config");
     assert!(
         gone,
-        "files of run {ns} left in /dev/shm after SIGTERM: {:?}\n(all files of the run: {:?})\n{out}",
+        "files of run {ns} left in /dev/shm after {name}: {:?}\n(all files of the run: {:?})\n{out}",
         ns.shm_files(),
         ns.all_files(&config)
     );
