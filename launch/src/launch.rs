@@ -398,7 +398,7 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
             }
             if wake == Wake::Tick {
                 let _ = events.drain(|_| {});
-                match sup.tick(&mut ctx, &taps)? {
+                match sup.tick(&mut ctx, &mut taps, &mut observer)? {
                     Outcome::Running => {}
                     Outcome::Finished => {
                         for t in taps.iter_mut() {

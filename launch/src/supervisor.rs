@@ -18,7 +18,7 @@ use nauta_messages::*;
 use nauta_runtime::{Context, Describe, RestartPolicy};
 
 use crate::children::{self, Launch, Running};
-use crate::monitor::Tap;
+use crate::monitor::{Observer, Tap};
 
 /// Restarts allowed within the window when the manifest gives no cap.
 const DEFAULT_MAX: u32 = 10;
@@ -240,7 +240,12 @@ impl Supervisor {
 
     /// Checks every child: reports exits, schedules and performs restarts.
     /// `taps` (drained just before) give the latest snapshots and stamps.
-    pub fn tick(&mut self, ctx: &mut Context, taps: &[Box<dyn Tap>]) -> anyhow::Result<Outcome> {
+    pub fn tick(
+        &mut self,
+        ctx: &mut Context,
+        taps: &mut [Box<dyn Tap>],
+        obs: &mut Observer,
+    ) -> anyhow::Result<Outcome> {
         // Once a source has ended its stream, the run is draining: nothing
         // more is restarted.
         let draining = self
@@ -297,6 +302,17 @@ impl Supervisor {
             let delay = m.restart.delay(m.recent.len() as u32);
             tracing::warn!(process = %m.name, code, ?delay, "process exited; restarting");
             m.pending = Some(now + delay);
+        }
+        if self
+            .members
+            .iter()
+            .any(|m| m.pending.is_some_and(|t| t <= now))
+        {
+            // The dead process published its last messages before it died:
+            // take them all, so that `--resume-after` is its true last stamp.
+            for t in taps.iter_mut() {
+                t.drain(obs)?;
+            }
         }
         for i in 0..self.members.len() {
             if self.members[i].pending.is_some_and(|t| t <= now) {

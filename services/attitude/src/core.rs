@@ -247,6 +247,14 @@ impl AttitudeCore {
             if imu.stamp_ns <= *after {
                 return Ok(None);
             }
+            let expected = *after + (imu.interval_s * 1e9).round() as u64;
+            if imu.stamp_ns > expected {
+                tracing::warn!(
+                    snapshot_ns = *after,
+                    first_sample_ns = imu.stamp_ns,
+                    "the inputs' history does not reach back to the snapshot: the samples between are missing"
+                );
+            }
             let est = restore(
                 self.variant,
                 self.latitude_rad,
