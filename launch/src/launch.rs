@@ -345,6 +345,9 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
 
     let mut failure = None;
     let mut stop_requested = false;
+    // READY events by (process, instance): a swapped-in instance is switched
+    // to once it is ready.
+    let mut ready_instances = std::collections::BTreeSet::new();
     let (mut pipeline, pipeline_inbox) =
         PipelineServer::open_named(&ctx, &nauta_runtime::control::pipeline_control_name())?;
     let mut status = StatusWriter::new(
@@ -397,8 +400,12 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
                 status.update(&mut sup, &observer, changed);
             }
             if wake == Wake::Tick {
-                let _ = events.drain(|_| {});
-                match sup.tick(&mut ctx, &mut taps, &mut observer)? {
+                let _ = events.drain(|e| {
+                    if e.kind == event_kind::READY {
+                        ready_instances.insert((fixed_str(&e.process), e.instance));
+                    }
+                });
+                match sup.tick(&mut ctx, &mut taps, &mut observer, &ready_instances)? {
                     Outcome::Running => {}
                     Outcome::Finished => {
                         for t in taps.iter_mut() {
@@ -419,6 +426,7 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     if exit == LoopExit::Signal {
         eprintln!("nauta: stopping on signal");
     }
+    sup.end_swaps();
     stop_all(&mut sup);
     for t in taps.iter_mut() {
         t.drain(&mut observer)?;

@@ -10,12 +10,13 @@
 //! role (`--resume-after`), so that it initialises from the snapshot, replays
 //! what its inputs still hold and publishes only what is new.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeSet, VecDeque};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use nauta_messages::*;
-use nauta_runtime::{Context, Describe, RestartPolicy};
+use nauta_runtime::control::Pending;
+use nauta_runtime::{Context, ControlClient, Describe, RestartPolicy};
 
 use crate::children::{self, Launch, Running};
 use crate::monitor::{Observer, Tap};
@@ -107,12 +108,53 @@ pub struct Member {
     /// again at once (with this variant, if a swap), whatever the policy.
     forced: Option<Option<String>>,
     swapping: bool,
+    /// `nauta swap`: the variant asked for, until the tick starts the swap.
+    swap_request: Option<String>,
+    /// A hot swap in progress.
+    swap: Option<Swap>,
 }
+
+/// A hot swap in progress (DESIGN §5): the new variant runs in standby beside
+/// the old one until the old one is deactivated and the new one activated at
+/// the old one's last published stamp.
+enum Swap {
+    /// The new instance starts in standby from the latest snapshot.
+    Starting {
+        new: Running,
+        instance: u32,
+        variant: String,
+        since: Instant,
+    },
+    /// DEACTIVATE sent to the old instance; its answer names its last stamp.
+    Deactivating {
+        new: Running,
+        instance: u32,
+        variant: String,
+        since: Instant,
+        _client: ControlClient,
+        pending: Pending<ControlRequest, ControlResponse>,
+    },
+    /// ACTIVATE sent to the new instance with that boundary.
+    Activating {
+        new: Running,
+        instance: u32,
+        variant: String,
+        since: Instant,
+        _client: ControlClient,
+        pending: Pending<ControlRequest, ControlResponse>,
+    },
+}
+
+/// How long a swap phase may take before the swap is abandoned.
+const SWAP_PHASE_TIMEOUT: Duration = Duration::from_secs(15);
 
 impl Member {
     /// Whether a restart is scheduled or asked for.
     pub fn restarting(&self) -> bool {
-        self.pending.is_some() || self.forced.is_some()
+        self.pending.is_some()
+            || self.forced.is_some()
+            || self.swap.is_some()
+            || self.swap_request.is_some()
     }
 }
 
@@ -131,6 +173,8 @@ pub enum Outcome {
 pub struct Supervisor {
     /// The members, in start order.
     pub members: Vec<Member>,
+    /// Instances replaced by a swap, until they have exited: (child, since).
+    retiring: Vec<(Running, Instant)>,
     manifest_file: PathBuf,
     run_dir: PathBuf,
     namespace: String,
@@ -141,6 +185,7 @@ impl Supervisor {
     pub fn new(manifest_file: &Path, run_dir: &Path, namespace: &str) -> Self {
         Self {
             members: Vec::new(),
+            retiring: Vec::new(),
             manifest_file: manifest_file.to_owned(),
             run_dir: run_dir.to_owned(),
             namespace: namespace.to_owned(),
@@ -201,6 +246,8 @@ impl Supervisor {
             variants: describe.variants.clone(),
             forced: None,
             swapping: false,
+            swap_request: None,
+            swap: None,
         });
         Ok(())
     }
@@ -225,11 +272,20 @@ impl Supervisor {
         if m.source {
             return Err((pipeline_status::REFUSED, format!("{name} is a source")));
         }
-        if m.settled || m.forced.is_some() || m.pending.is_some() || m.child.poll() {
-            return Err((pipeline_status::REFUSED, format!("{name} is not running")));
+        if m.settled || m.restarting() || m.child.poll() {
+            return Err((
+                pipeline_status::REFUSED,
+                format!("{name} is not running or busy"),
+            ));
         }
-        m.forced = Some(variant.map(str::to_owned));
-        m.child.terminate();
+        match variant {
+            // A swap starts the new variant beside the old one (next tick).
+            Some(v) => m.swap_request = Some(v.to_owned()),
+            None => {
+                m.forced = Some(None);
+                m.child.terminate();
+            }
+        }
         Ok(())
     }
 
@@ -245,7 +301,9 @@ impl Supervisor {
         ctx: &mut Context,
         taps: &mut [Box<dyn Tap>],
         obs: &mut Observer,
+        ready: &BTreeSet<(String, u32)>,
     ) -> anyhow::Result<Outcome> {
+        self.advance_swaps(ctx, taps, ready)?;
         // Once a source has ended its stream, the run is draining: nothing
         // more is restarted.
         let draining = self
@@ -255,7 +313,8 @@ impl Supervisor {
         let now = Instant::now();
         for i in 0..self.members.len() {
             let m = &mut self.members[i];
-            if m.settled || m.pending.is_some() || !m.child.poll() {
+            // During a swap the old instance exits on purpose.
+            if m.settled || m.pending.is_some() || m.swap.is_some() || !m.child.poll() {
                 continue;
             }
             let code = m.child.code().unwrap_or(-1);
@@ -322,15 +381,202 @@ impl Supervisor {
         if let Some(f) = self.members.iter().find_map(|m| m.failure.clone()) {
             return Ok(Outcome::Failed(f));
         }
-        let done = self
-            .members
-            .iter_mut()
-            .all(|m| m.pending.is_none() && m.child.poll());
+        let done = self.retiring.is_empty()
+            && self
+                .members
+                .iter_mut()
+                .all(|m| m.pending.is_none() && m.swap.is_none() && m.child.poll());
         Ok(if done {
             Outcome::Finished
         } else {
             Outcome::Running
         })
+    }
+
+    /// Moves every hot swap one step on, without blocking (the launcher keeps
+    /// draining its taps meanwhile, so no publisher waits on it).
+    fn advance_swaps(
+        &mut self,
+        ctx: &mut Context,
+        taps: &[Box<dyn Tap>],
+        ready: &BTreeSet<(String, u32)>,
+    ) -> anyhow::Result<()> {
+        let now = Instant::now();
+        for i in 0..self.members.len() {
+            if let Some(variant) = self.members[i].swap_request.take() {
+                let m = &self.members[i];
+                let snapshot = latest_snapshot(&self.run_dir, m, taps)?;
+                let instance = m.instance + 1;
+                let new = children::spawn(&Launch {
+                    bin: &m.bin,
+                    name: &m.name,
+                    manifest: &self.manifest_file,
+                    namespace: &self.namespace,
+                    instance,
+                    variant: Some(&variant),
+                    standby: true,
+                    args: &m.args,
+                    warm: Some(children::Warm {
+                        snapshot: snapshot.as_deref(),
+                        resume_after_ns: None,
+                    }),
+                })?;
+                tracing::info!(process = %m.name, %variant, instance, "swap: the new variant starts in standby");
+                self.members[i].swap = Some(Swap::Starting {
+                    new,
+                    instance,
+                    variant,
+                    since: now,
+                });
+            }
+            let Some(swap) = self.members[i].swap.take() else {
+                continue;
+            };
+            let m = &mut self.members[i];
+            let next = match swap {
+                Swap::Starting {
+                    mut new,
+                    instance,
+                    variant,
+                    since,
+                } => {
+                    if new.poll() || now.duration_since(since) > SWAP_PHASE_TIMEOUT {
+                        tracing::error!(process = %m.name, %variant, "swap abandoned: the new variant did not become ready");
+                        new.kill();
+                        self.retiring.push((new, now));
+                        None
+                    } else if ready.contains(&(m.name.clone(), instance)) {
+                        let client = ControlClient::open(ctx, m.role, m.instance)?;
+                        let pending = client.send(control(command::DEACTIVATE, 0))?;
+                        Some(Swap::Deactivating {
+                            new,
+                            instance,
+                            variant,
+                            since: now,
+                            _client: client,
+                            pending,
+                        })
+                    } else {
+                        Some(Swap::Starting {
+                            new,
+                            instance,
+                            variant,
+                            since,
+                        })
+                    }
+                }
+                Swap::Deactivating {
+                    mut new,
+                    instance,
+                    variant,
+                    since,
+                    _client,
+                    pending,
+                } => match pending.poll()? {
+                    Some(r) if r.status == 0 => {
+                        let boundary = r.last_stamp_ns;
+                        let client = ControlClient::open(ctx, m.role, instance)?;
+                        let pending = client.send(control(command::ACTIVATE, boundary))?;
+                        tracing::info!(process = %m.name, boundary, "swap: the old variant is deactivated");
+                        Some(Swap::Activating {
+                            new,
+                            instance,
+                            variant,
+                            since: now,
+                            _client: client,
+                            pending,
+                        })
+                    }
+                    answer => {
+                        if answer.is_some() || now.duration_since(since) > SWAP_PHASE_TIMEOUT {
+                            tracing::error!(process = %m.name, %variant, "swap abandoned: the old variant did not deactivate");
+                            new.kill();
+                            self.retiring.push((new, now));
+                            None
+                        } else {
+                            Some(Swap::Deactivating {
+                                new,
+                                instance,
+                                variant,
+                                since,
+                                _client,
+                                pending,
+                            })
+                        }
+                    }
+                },
+                Swap::Activating {
+                    new,
+                    instance,
+                    variant,
+                    since,
+                    _client,
+                    pending,
+                } => {
+                    let answer = pending.poll()?;
+                    if answer.is_none() && now.duration_since(since) <= SWAP_PHASE_TIMEOUT {
+                        Some(Swap::Activating {
+                            new,
+                            instance,
+                            variant,
+                            since,
+                            _client,
+                            pending,
+                        })
+                    } else {
+                        if answer.is_none_or(|r| r.status != 0) {
+                            tracing::error!(process = %m.name, "the new variant did not confirm its activation; it runs anyway");
+                        }
+                        let old = std::mem::replace(&mut m.child, new);
+                        self.retiring.push((old, now));
+                        m.instance = instance;
+                        m.variant = Some(variant);
+                        m.started = now;
+                        m.swaps += 1;
+                        publish(ctx, event_kind::SWAPPED, m, 0);
+                        tracing::info!(process = %m.name, instance, "swap done");
+                        None
+                    }
+                }
+            };
+            self.members[i].swap = next;
+        }
+        // Replaced instances exit by themselves once deactivated.
+        self.retiring.retain_mut(|(child, since)| {
+            if child.poll() {
+                return false;
+            }
+            if now.duration_since(*since) > SWAP_PHASE_TIMEOUT {
+                child.kill();
+            }
+            true
+        });
+        Ok(())
+    }
+
+    /// Ends swaps in progress and waits for replaced instances (shutdown).
+    pub fn end_swaps(&mut self) {
+        for m in self.members.iter_mut() {
+            if let Some(
+                Swap::Starting { new, .. }
+                | Swap::Deactivating { new, .. }
+                | Swap::Activating { new, .. },
+            ) = m.swap.take()
+            {
+                new.terminate();
+                self.retiring.push((new, Instant::now()));
+            }
+        }
+        let t0 = Instant::now();
+        while !self.retiring.is_empty() && t0.elapsed() < Duration::from_secs(5) {
+            self.retiring.retain_mut(|(c, _)| !c.poll());
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        for (c, _) in self.retiring.iter_mut() {
+            c.kill();
+            let _ = c.child.wait();
+        }
+        self.retiring.clear();
     }
 
     fn restart(
@@ -341,23 +587,12 @@ impl Supervisor {
     ) -> anyhow::Result<()> {
         let m = &mut self.members[i];
         m.pending = None;
-        let snapshot_service = snapshot_service(m.role.name());
-        let snapshot = taps
-            .iter()
-            .find(|t| t.service() == snapshot_service)
-            .and_then(|t| t.latest());
+        let file = latest_snapshot(&self.run_dir, m, taps)?;
         let resume_after = taps
             .iter()
             .filter(|t| m.outputs.iter().any(|o| o == t.service()))
             .filter_map(|t| t.span().map(|(_, last)| last))
             .max();
-        let mut file = None;
-        if let Some((stamp, bytes)) = snapshot {
-            let path = self.run_dir.join(format!("snapshot-{}.bin", m.name));
-            std::fs::write(&path, bytes)?;
-            tracing::info!(process = %m.name, snapshot_stamp_ns = stamp, "warm start from the latest snapshot");
-            file = Some(path);
-        }
         let instance = m.instance + 1;
         m.child = children::spawn(&Launch {
             bin: &m.bin,
@@ -383,6 +618,36 @@ impl Supervisor {
             publish(ctx, event_kind::RESTARTED, m, 0);
         }
         Ok(())
+    }
+}
+
+/// Writes the role's latest snapshot (as the launcher's tap kept it) to a
+/// file in the run directory for a new instance; None if there is none yet.
+fn latest_snapshot(
+    run_dir: &Path,
+    m: &Member,
+    taps: &[Box<dyn Tap>],
+) -> anyhow::Result<Option<PathBuf>> {
+    let service = snapshot_service(m.role.name());
+    let Some((stamp, bytes)) = taps
+        .iter()
+        .find(|t| t.service() == service)
+        .and_then(|t| t.latest())
+    else {
+        return Ok(None);
+    };
+    let path = run_dir.join(format!("snapshot-{}-{}.bin", m.name, m.instance + 1));
+    std::fs::write(&path, bytes)?;
+    tracing::info!(process = %m.name, snapshot_stamp_ns = stamp, "warm start from the latest snapshot");
+    Ok(Some(path))
+}
+
+fn control(command: u32, boundary_stamp_ns: u64) -> ControlRequest {
+    ControlRequest {
+        header: Header::new(0, 0, Role::Launcher, 0),
+        command,
+        pad: 0,
+        boundary_stamp_ns,
     }
 }
 

@@ -107,7 +107,15 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         Err(e) => tracing::warn!(error = %e, "snapshot unreadable; starting cold"),
     }
     // Estimates up to this stamp were published by the previous instance.
-    let resume_after = ctx.resume_after_ns;
+    let mut resume_after = ctx.resume_after_ns;
+    // Hot swap (DESIGN §5): a standby instance follows its inputs without
+    // publishing, keeping its latest estimates, until the launcher activates
+    // it at a stamp boundary; the instance it replaces is deactivated first
+    // and exits, having published exactly up to that boundary.
+    let mut standby = ctx.standby;
+    let mut held: std::collections::VecDeque<AttitudeEstimate> = std::collections::VecDeque::new();
+    let mut last_published: Option<u64> = None;
+    let mut deactivated = false;
 
     let (mut imu_in, imu_inbox) = ctx.subscriber(&services::imu())?;
     let (mut sensor_progress, progress_inbox) =
@@ -125,7 +133,11 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         tracing::info!("stopped by a signal before the inputs appeared");
         return Ok(());
     }
-    health.state = state::RUNNING;
+    health.state = if standby {
+        state::STANDBY
+    } else {
+        state::RUNNING
+    };
 
     // One data input today; the merge is what makes a second one deterministic.
     const IMU: usize = 0;
@@ -138,6 +150,7 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         &[&imu_inbox, &progress_inbox, &control_inbox],
         |wake| {
             let mut snapshot_now = false;
+            let mut activate_after = None;
             control.serve(|req| {
                 let status = match req.command {
                     command::SNAPSHOT_NOW => {
@@ -148,17 +161,51 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                         stop = true;
                         0
                     }
-                    // Standby and switching arrive with the launcher's hot swap.
+                    // Publish from the first stamp after the boundary.
+                    command::ACTIVATE if standby => {
+                        activate_after = Some(req.boundary_stamp_ns);
+                        0
+                    }
+                    // Publish nothing more: the answer carries the last stamp
+                    // published, which the launcher hands to the successor.
+                    command::DEACTIVATE if !standby => {
+                        deactivated = true;
+                        0
+                    }
                     _ => 2,
                 };
                 ControlResponse {
                     header: Header::new(last_stamp, 0, Role::Attitude, ctx.instance),
                     status,
-                    state: if stop { state::DRAINING } else { health.state },
-                    last_stamp_ns: last_stamp,
+                    state: if stop || deactivated {
+                        state::DRAINING
+                    } else {
+                        health.state
+                    },
+                    last_stamp_ns: if req.command == command::DEACTIVATE {
+                        last_published.unwrap_or(0)
+                    } else {
+                        last_stamp
+                    },
                 }
             })?;
-            if snapshot_now {
+            if deactivated {
+                tracing::info!(last_published = ?last_published, "deactivated; exiting for the successor");
+                return Ok(ControlFlow::Break(()));
+            }
+            if let Some(boundary) = activate_after {
+                standby = false;
+                health.state = state::RUNNING;
+                resume_after = Some(resume_after.map_or(boundary, |r| r.max(boundary)));
+                for e in held.drain(..).filter(|e| e.header.stamp_ns > boundary) {
+                    last_published = Some(e.header.stamp_ns);
+                    estimate_out.publish(e)?;
+                    health.outputs += 1;
+                }
+                estimate_out.flush();
+                tracing::info!(boundary, "activated");
+            }
+            if snapshot_now && !standby {
                 publish_snapshot(&core, &mut snapshot_out, last_stamp)?;
             }
             if wake == Wake::Tick {
@@ -209,7 +256,9 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                 // A snapshot at every whole second of the run's clock.
                 if stamp >= next_snapshot_ns {
                     next_snapshot_ns = (stamp / SNAPSHOT_PERIOD_NS + 1) * SNAPSHOT_PERIOD_NS;
-                    publish_snapshot(&core, &mut snapshot_out, stamp)?;
+                    if !standby {
+                        publish_snapshot(&core, &mut snapshot_out, stamp)?;
+                    }
                 }
                 if resume_after.is_some_and(|r| stamp <= r) {
                     continue;
@@ -220,19 +269,32 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                     } else {
                         calibration::NONE
                     };
-                    estimate_out.publish(AttitudeEstimate {
+                    let estimate = AttitudeEstimate {
                         header: Header::new(stamp, 0, Role::Attitude, ctx.instance),
                         quat_nb: [out.q_nb.w, out.q_nb.i, out.q_nb.j, out.q_nb.k],
                         std_rad: out.std_rad.into(),
                         gyro_bias_rad_s: out.gyro_bias.into(),
                         calibration,
                         pad: 0,
-                    })?;
-                    health.outputs += 1;
+                    };
+                    if standby {
+                        held.push_back(estimate);
+                        while held.len() > HELD_ESTIMATES {
+                            held.pop_front();
+                        }
+                    } else {
+                        estimate_out.publish(estimate)?;
+                        last_published = Some(stamp);
+                        health.outputs += 1;
+                    }
                 }
             }
             estimate_out.flush();
             if merge.is_finished() {
+                if standby {
+                    // Never activated: the active instance ends the stream.
+                    return Ok(ControlFlow::Break(()));
+                }
                 progress_out.publish_now(Progress::end_of_stream(
                     last_stamp,
                     Role::Attitude,
@@ -256,6 +318,9 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     );
     Ok(())
 }
+
+/// Estimates a standby instance keeps for its activation (5 s at 100 Hz).
+const HELD_ESTIMATES: usize = 500;
 
 /// Snapshot period in the run's clock (DESIGN §4: 1 Hz).
 const SNAPSHOT_PERIOD_NS: u64 = 1_000_000_000;

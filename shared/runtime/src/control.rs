@@ -172,6 +172,20 @@ impl<Req: Message, Res: Message> ControlClient<Req, Res> {
         })
     }
 
+    /// Sends `request` without waiting: poll the answer with
+    /// [`Pending::poll`] (a launcher must keep draining its inputs meanwhile).
+    pub fn send(&self, request: Req) -> anyhow::Result<Pending<Req, Res>> {
+        let inner = self
+            .client
+            .send_copy(request)
+            .map_err(|e| anyhow::anyhow!("{}: request not sent: {e:?}", self.name))?;
+        let _ = self.notifier.notify();
+        Ok(Pending {
+            inner,
+            name: self.name.clone(),
+        })
+    }
+
     /// Sends `request` and waits up to `timeout` for the answer.
     pub fn request(&self, ctx: &Context, request: Req, timeout: Duration) -> anyhow::Result<Res> {
         let pending = self
@@ -194,5 +208,30 @@ impl<Req: Message, Res: Message> ControlClient<Req, Res> {
             );
             anyhow::ensure!(ctx.sleep(Duration::from_millis(1)), "interrupted");
         }
+    }
+}
+
+/// A request sent with [`ControlClient::send`], its answer not yet read.
+pub struct Pending<Req: Message, Res: Message> {
+    inner: iceoryx2::pending_response::PendingResponse<Ipc, Req, (), Res, ()>,
+    name: String,
+}
+
+impl<Req: Message, Res: Message> std::fmt::Debug for Pending<Req, Res> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Pending")
+            .field("service", &self.name)
+            .finish()
+    }
+}
+
+impl<Req: Message, Res: Message> Pending<Req, Res> {
+    /// The answer, if it has arrived.
+    pub fn poll(&self) -> anyhow::Result<Option<Res>> {
+        Ok(self
+            .inner
+            .receive()
+            .map_err(|e| anyhow::anyhow!("{}: {e:?}", self.name))?
+            .map(|r| *r.payload()))
     }
 }
