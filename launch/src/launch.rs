@@ -734,6 +734,15 @@ fn summary(r: &Report<'_>) -> String {
     if !restarts.is_empty() {
         parts.push(format!("restarts {}", restarts.join(", ")));
     }
+    let swaps: Vec<String> = sup
+        .members
+        .iter()
+        .filter(|m| m.swaps > 0)
+        .map(|m| format!("{} {}", m.name, m.swaps))
+        .collect();
+    if !swaps.is_empty() {
+        parts.push(format!("swaps {}", swaps.join(", ")));
+    }
     if exit == LoopExit::Signal {
         parts.push("stopped by signal".into());
     }

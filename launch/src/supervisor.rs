@@ -104,10 +104,9 @@ pub struct Member {
     settled: bool,
     /// Variants its binary implements.
     pub variants: Vec<String>,
-    /// A restart or swap asked from another shell: on the next exit, start
-    /// again at once (with this variant, if a swap), whatever the policy.
-    forced: Option<Option<String>>,
-    swapping: bool,
+    /// `nauta restart`: on the next exit, start again at once, whatever the
+    /// policy.
+    forced: bool,
     /// `nauta swap`: the variant asked for, until the tick starts the swap.
     swap_request: Option<String>,
     /// A hot swap in progress.
@@ -151,10 +150,7 @@ const SWAP_PHASE_TIMEOUT: Duration = Duration::from_secs(15);
 impl Member {
     /// Whether a restart is scheduled or asked for.
     pub fn restarting(&self) -> bool {
-        self.pending.is_some()
-            || self.forced.is_some()
-            || self.swap.is_some()
-            || self.swap_request.is_some()
+        self.pending.is_some() || self.forced || self.swap.is_some() || self.swap_request.is_some()
     }
 }
 
@@ -244,8 +240,7 @@ impl Supervisor {
             failure: None,
             settled: false,
             variants: describe.variants.clone(),
-            forced: None,
-            swapping: false,
+            forced: false,
             swap_request: None,
             swap: None,
         });
@@ -282,7 +277,7 @@ impl Supervisor {
             // A swap starts the new variant beside the old one (next tick).
             Some(v) => m.swap_request = Some(v.to_owned()),
             None => {
-                m.forced = Some(None);
+                m.forced = true;
                 m.child.terminate();
             }
         }
@@ -322,11 +317,7 @@ impl Supervisor {
             // Its shared memory goes now, not at a publisher's deadline.
             let report = ctx.cleanup_dead_nodes();
             tracing::debug!(?report, process = %m.name, "cleaned up after exit");
-            if let Some(variant) = m.forced.take() {
-                if let Some(v) = variant {
-                    m.variant = Some(v);
-                    m.swapping = true;
-                }
+            if std::mem::take(&mut m.forced) {
                 m.pending = Some(now);
                 continue;
             }
@@ -610,13 +601,8 @@ impl Supervisor {
         })?;
         m.instance = instance;
         m.started = Instant::now();
-        if std::mem::take(&mut m.swapping) {
-            m.swaps += 1;
-            publish(ctx, event_kind::SWAPPED, m, 0);
-        } else {
-            m.restarts += 1;
-            publish(ctx, event_kind::RESTARTED, m, 0);
-        }
+        m.restarts += 1;
+        publish(ctx, event_kind::RESTARTED, m, 0);
         Ok(())
     }
 }

@@ -342,6 +342,11 @@ fn swap_to_another_variant_and_back_is_seamless() {
     watch.finish();
     assert_eq!(out.code(), Some(0), "{out}");
     assert_eq!(out.summary().gaps(), Some(0), "{}", out.summary().line);
+    assert!(
+        out.summary().line.contains("swaps attitude 2"),
+        "{}",
+        out.summary().line
+    );
 }
 
 #[test]
