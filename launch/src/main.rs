@@ -84,6 +84,19 @@ enum BenchCommand {
     /// Kill a random estimator every 5-15 s of a wall-clock survey at 10x; restarts,
     /// latencies, losses and the attitude error beside a run without kills.
     Chaos(bench::chaos::ChaosArgs),
+    /// Attitude estimators in-process: BROAD real data (`--broad DIR`) with the BROAD
+    /// metric, or paper 000's simulated conditions (`--sim`) and the PF's throughput.
+    Attitude {
+        /// A directory of BROAD-format trials (`.csv` or `.csv.gz`), e.g. ../shared/data/broad.
+        #[arg(long, conflicts_with = "sim", required_unless_present = "sim")]
+        broad: Option<std::path::PathBuf>,
+        /// Paper 000's still, pitch-and-roll and yaw conditions on the simulator.
+        #[arg(long)]
+        sim: bool,
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Simulator speed: the scenarios generated in-process, all sensors, one core.
     Sim {
         /// Print one JSON object instead of a table.
@@ -140,6 +153,11 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Attitude { broad, sim, json } => match (broad, sim) {
+                (Some(dir), _) => bench::attitude::run_broad(&dir, json),
+                (None, _) => bench::attitude::run_sim(json),
+            }
+            .map(|()| ExitCode::SUCCESS),
         },
         Command::IpcPeer { args } => bench::ipc::peer(&args).map(|()| ExitCode::SUCCESS),
     }

@@ -1,5 +1,6 @@
 //! `nauta bench ...`: benchmarks that print figures (JSON with `--json`).
 
+pub mod attitude;
 pub mod chaos;
 pub mod ipc;
 pub mod sim;

@@ -13,6 +13,15 @@
 //!   `moving_alignment_*_std_deg`. The expected field norm and dip come
 //!   from the alignment's mean field ([`MagneticReference::from_mean_field`]).
 //!   Then each IMU sample is one `predict` and one `update` (no decimation).
+//! - `pf`: [`ParticleFilter`], paper 000's attitude particle filter, started
+//!   as the `mekf` is: particles around the aligned attitude; if the
+//!   alignment was still, biases around its mean gyro less the Earth rate
+//!   (paper 000 §IV-A's static calibration) with a 1σ of `N/√T` (N the
+//!   filter's process noise density, floored at 0.01 °/s), otherwise around
+//!   zero with the attitude spread of `moving_alignment_*_std_deg`; the
+//!   magnetic reference from the alignment's mean field. Parameters in
+//!   `shared/estimation/src/pf/params.rs`
+//!   (`variants.pf = { alignment_samples = 400, filter = { particles = 1000 } }`).
 
 use nalgebra::Vector3;
 use serde::Deserialize;
@@ -20,6 +29,7 @@ use serde::Deserialize;
 use nauta_estimation::alignment::Alignment;
 use nauta_estimation::earth::earth_rate_ned;
 use nauta_estimation::mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
+use nauta_estimation::pf::{ParticleFilter, PfConfig, PfParams};
 use nauta_estimation::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot, GyroIntegrator};
 use nauta_messages::checked::Imu;
 
@@ -27,7 +37,7 @@ use nauta_messages::checked::Imu;
 mod tests;
 
 /// The variants this binary implements; the first is the default.
-pub const VARIANTS: [&str; 2] = ["gyro", "mekf"];
+pub const VARIANTS: [&str; 3] = ["gyro", "mekf", "pf"];
 
 /// Parameters of the `gyro` variant (`[process.attitude.variants.gyro]` over
 /// `[process.attitude.params]`).
@@ -82,6 +92,39 @@ impl Default for MekfVariantParams {
     }
 }
 
+/// Parameters of the `pf` variant (`variants.pf = { alignment_samples = 400,
+/// filter = { particles = 1000 } }`); the alignment fields as the `mekf`'s.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PfVariantParams {
+    /// Samples averaged for the initial alignment.
+    pub alignment_samples: usize,
+    /// The alignment counts as still, and its mean gyro as the initial bias
+    /// (paper 000's static calibration), when the RMS of the gyro samples
+    /// about their mean is below this, °/s. Default 1 (as the `mekf`).
+    pub still_gyro_rms_deg_s: f64,
+    /// Initial roll and pitch 1σ of the particles, degrees, when the alignment
+    /// was not still. Default 20 (as the `mekf`).
+    pub moving_alignment_tilt_std_deg: f64,
+    /// Initial heading 1σ, degrees, when the alignment was not still.
+    /// Default 30 (as the `mekf`).
+    pub moving_alignment_heading_std_deg: f64,
+    /// The filter's parameters.
+    pub filter: PfParams,
+}
+
+impl Default for PfVariantParams {
+    fn default() -> Self {
+        Self {
+            alignment_samples: 200,
+            still_gyro_rms_deg_s: 1.0,
+            moving_alignment_tilt_std_deg: 20.0,
+            moving_alignment_heading_std_deg: 30.0,
+            filter: PfParams::default(),
+        }
+    }
+}
+
 /// A variant's parameters.
 #[derive(Debug, Clone)]
 pub enum VariantParams {
@@ -89,6 +132,8 @@ pub enum VariantParams {
     Gyro(GyroParams),
     /// `mekf`.
     Mekf(MekfVariantParams),
+    /// `pf`.
+    Pf(PfVariantParams),
 }
 
 /// The checked form of [`VariantParams`].
@@ -101,6 +146,31 @@ enum Variant {
         moving_tilt_std_rad: f64,
         moving_heading_std_rad: f64,
     },
+    Pf {
+        config: PfConfig,
+        still_gyro_rms_rad_s: f64,
+        moving_tilt_std_rad: f64,
+        moving_heading_std_rad: f64,
+    },
+}
+
+/// Checks the alignment fields shared by `mekf` and `pf`.
+fn check_alignment_fields(
+    still_gyro_rms_deg_s: f64,
+    tilt_std_deg: f64,
+    heading_std_deg: f64,
+) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        still_gyro_rms_deg_s >= 0.0 && still_gyro_rms_deg_s.is_finite(),
+        "still_gyro_rms_deg_s = {still_gyro_rms_deg_s} is not a non-negative number"
+    );
+    for (name, v) in [
+        ("moving_alignment_tilt_std_deg", tilt_std_deg),
+        ("moving_alignment_heading_std_deg", heading_std_deg),
+    ] {
+        anyhow::ensure!(v > 0.0 && v <= 180.0, "{name} = {v} is not in (0, 180]");
+    }
+    Ok(())
 }
 
 /// Running mean and spread of the gyro during the alignment (Welford).
@@ -133,6 +203,7 @@ impl GyroMean {
 enum Estimator {
     Gyro(GyroIntegrator),
     Mekf(Box<Mekf>),
+    Pf(Box<ParticleFilter>),
 }
 
 impl Estimator {
@@ -140,6 +211,7 @@ impl Estimator {
         match self {
             Estimator::Gyro(g) => g,
             Estimator::Mekf(m) => m.as_ref(),
+            Estimator::Pf(p) => p.as_ref(),
         }
     }
 
@@ -147,6 +219,7 @@ impl Estimator {
         match self {
             Estimator::Gyro(g) => g,
             Estimator::Mekf(m) => m.as_mut(),
+            Estimator::Pf(p) => p.as_mut(),
         }
     }
 }
@@ -202,6 +275,22 @@ impl AttitudeCore {
                     p.alignment_samples,
                     Variant::Mekf {
                         config: MekfConfig::try_from(&p.filter)?,
+                        still_gyro_rms_rad_s: p.still_gyro_rms_deg_s.to_radians(),
+                        moving_tilt_std_rad: p.moving_alignment_tilt_std_deg.to_radians(),
+                        moving_heading_std_rad: p.moving_alignment_heading_std_deg.to_radians(),
+                    },
+                )
+            }
+            VariantParams::Pf(p) => {
+                check_alignment_fields(
+                    p.still_gyro_rms_deg_s,
+                    p.moving_alignment_tilt_std_deg,
+                    p.moving_alignment_heading_std_deg,
+                )?;
+                (
+                    p.alignment_samples,
+                    Variant::Pf {
+                        config: PfConfig::try_from(&p.filter)?,
                         still_gyro_rms_rad_s: p.still_gyro_rms_deg_s.to_radians(),
                         moving_tilt_std_rad: p.moving_alignment_tilt_std_deg.to_radians(),
                         moving_heading_std_rad: p.moving_alignment_heading_std_deg.to_radians(),
@@ -311,7 +400,8 @@ impl AttitudeCore {
 /// The estimator of a warm start: the variant's estimator at the snapshot's
 /// attitude with the snapshot's state. The `mekf` takes its magnetic
 /// reference (field norm and dip) from the first sample's field seen at the
-/// snapshot's attitude, since the snapshot does not carry it.
+/// snapshot's attitude, since the snapshot does not carry it; so does the
+/// `pf`, whose particles are re-seeded around the snapshot.
 fn restore(
     variant: Variant,
     latitude_rad: f64,
@@ -328,6 +418,16 @@ fn restore(
         Variant::Mekf { config, .. } => {
             let reference = MagneticReference::from_mean_field(&q, &first.mag_ut)?;
             Estimator::Mekf(Box::new(Mekf::new(
+                &config,
+                q,
+                latitude_rad,
+                declination_rad,
+                reference,
+            )?))
+        }
+        Variant::Pf { config, .. } => {
+            let reference = MagneticReference::from_mean_field(&q, &first.mag_ut)?;
+            Estimator::Pf(Box::new(ParticleFilter::new(
                 &config,
                 q,
                 latitude_rad,
@@ -353,49 +453,82 @@ fn start(
     stamp_ns: u64,
 ) -> anyhow::Result<Estimator> {
     let q = a.finish()?;
-    let (config, still_rms, moving_tilt_std, moving_heading_std) = match variant {
-        Variant::Gyro => {
-            return Ok(Estimator::Gyro(GyroIntegrator::new(
-                q,
-                latitude_rad,
-                stamp_ns,
-            )?));
-        }
+    // The expected field (the `gyro` variant does not need one).
+    let reference = || -> anyhow::Result<MagneticReference> {
+        let mean_mag = a
+            .mean_magnetic_field()
+            .ok_or_else(|| anyhow::anyhow!("alignment finished without samples"))?;
+        Ok(MagneticReference::from_mean_field(&q, &mean_mag)?)
+    };
+    let earth_b = q.inverse_transform_vector(&earth_rate_ned(latitude_rad));
+    match variant {
+        Variant::Gyro => Ok(Estimator::Gyro(GyroIntegrator::new(
+            q,
+            latitude_rad,
+            stamp_ns,
+        )?)),
         Variant::Mekf {
             config,
             still_gyro_rms_rad_s,
             moving_tilt_std_rad,
             moving_heading_std_rad,
-        } => (
+        } => {
+            let reference = reference()?;
+            let mut mekf = Mekf::new(&config, q, latitude_rad, declination_rad, reference)?;
+            let still = gyro.rms() <= still_gyro_rms_rad_s && gyro.duration_s > 0.0;
+            if still {
+                let bias = gyro.mean - earth_b;
+                let std = (config.gyro_noise_rad_rt_s().powi(2) / gyro.duration_s
+                    + config.gyro_bias_instability_rad_s().powi(2))
+                .sqrt();
+                mekf = mekf.with_initial_bias(bias, std)?;
+            } else {
+                mekf =
+                    mekf.with_initial_attitude_std(moving_tilt_std_rad, moving_heading_std_rad)?;
+            }
+            tracing::info!(
+                still,
+                gyro_rms_deg_s = gyro.rms().to_degrees(),
+                bias_deg_h = ?mekf.gyro_bias().map(|b| b.to_degrees() * 3600.0),
+                field_ut = reference.field_ut(),
+                dip_deg = reference.dip_rad().to_degrees(),
+                "aligned; mekf starts"
+            );
+            Ok(Estimator::Mekf(Box::new(mekf)))
+        }
+        Variant::Pf {
             config,
             still_gyro_rms_rad_s,
             moving_tilt_std_rad,
             moving_heading_std_rad,
-        ),
-    };
-    let mean_mag = a
-        .mean_magnetic_field()
-        .ok_or_else(|| anyhow::anyhow!("alignment finished without samples"))?;
-    let reference = MagneticReference::from_mean_field(&q, &mean_mag)?;
-    let mut mekf = Mekf::new(&config, q, latitude_rad, declination_rad, reference)?;
-    let still = gyro.rms() <= still_rms && gyro.duration_s > 0.0;
-    if still {
-        let earth_b = q.inverse_transform_vector(&earth_rate_ned(latitude_rad));
-        let bias = gyro.mean - earth_b;
-        let std = (config.gyro_noise_rad_rt_s().powi(2) / gyro.duration_s
-            + config.gyro_bias_instability_rad_s().powi(2))
-        .sqrt();
-        mekf = mekf.with_initial_bias(bias, std)?;
-    } else {
-        mekf = mekf.with_initial_attitude_std(moving_tilt_std, moving_heading_std)?;
+        } => {
+            let reference = reference()?;
+            let mut pf = ParticleFilter::new(&config, q, latitude_rad, declination_rad, reference)?;
+            let still = gyro.rms() <= still_gyro_rms_rad_s && gyro.duration_s > 0.0;
+            if still {
+                // Paper 000's static calibration: the still mean less the
+                // Earth rate, known to N/√T.
+                let bias = gyro.mean - earth_b;
+                let std = (config.gyro_noise_rad_rt_s() / gyro.duration_s.sqrt())
+                    .max(PF_MIN_INITIAL_BIAS_STD_RAD_S);
+                pf = pf.with_initial_bias(bias, std)?;
+            } else {
+                pf = pf.with_initial_attitude_std(moving_tilt_std_rad, moving_heading_std_rad)?;
+            }
+            tracing::info!(
+                still,
+                particles = config.particles(),
+                gyro_rms_deg_s = gyro.rms().to_degrees(),
+                bias_deg_h = ?pf.gyro_bias().map(|b| b.to_degrees() * 3600.0),
+                field_ut = reference.field_ut(),
+                dip_deg = reference.dip_rad().to_degrees(),
+                "aligned; pf starts"
+            );
+            Ok(Estimator::Pf(Box::new(pf)))
+        }
     }
-    tracing::info!(
-        still,
-        gyro_rms_deg_s = gyro.rms().to_degrees(),
-        bias_deg_h = ?mekf.gyro_bias().map(|b| b.to_degrees() * 3600.0),
-        field_ut = reference.field_ut(),
-        dip_deg = reference.dip_rad().to_degrees(),
-        "aligned; mekf starts"
-    );
-    Ok(Estimator::Mekf(Box::new(mekf)))
 }
+
+/// Smallest initial bias 1σ of the `pf` after a still alignment, rad/s
+/// (0.01 °/s): the particles keep some spread in bias.
+const PF_MIN_INITIAL_BIAS_STD_RAD_S: f64 = 1.745e-4;

@@ -70,6 +70,7 @@ fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result
     );
     let params = match variant {
         "mekf" => VariantParams::Mekf(manifest.params(process, Some(variant))?),
+        "pf" => VariantParams::Pf(manifest.params(process, Some(variant))?),
         _ => VariantParams::Gyro(manifest.params(process, Some(variant))?),
     };
     let site = manifest.site.with_context(|| {

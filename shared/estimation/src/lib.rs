@@ -11,10 +11,14 @@
 //! - [`attitude`]: quaternion and Euler conventions, rotation vectors, the exact
 //!   attitude update and its sensor-side inverse, attitude error metrics.
 //! - [`alignment`]: static coarse alignment from accelerometer and magnetometer.
+//! - [`calibration`]: static gyro/accelerometer offsets and magnetometer hard-
+//!   and soft-iron calibration (least-squares ellipsoid, particle swarm).
 //! - [`estimator`]: the [`AttitudeEstimator`] role trait and its snapshot.
 //! - [`gyro`]: pure gyro integration, paper 000's baseline.
 //! - [`mekf`]: multiplicative extended Kalman filter for attitude and gyro bias,
 //!   aided by gravity and magnetic heading.
+//! - [`pf`]: paper 000's attitude particle filter, with gyro bias estimation,
+//!   disturbance rejection and initialisation from the first samples.
 //! - [`strapdown`]: free strapdown inertial navigation on the WGS84 ellipsoid.
 //!
 //! Equations name the paper (`../shared/papers/`, by number) or the textbook
@@ -24,10 +28,12 @@
 
 pub mod alignment;
 pub mod attitude;
+pub mod calibration;
 pub mod earth;
 pub mod estimator;
 pub mod gyro;
 pub mod mekf;
+pub mod pf;
 pub mod strapdown;
 
 pub use alignment::Alignment;
@@ -35,4 +41,5 @@ pub use attitude::{AttitudeError, HeadingInclinationError};
 pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot};
 pub use gyro::{GyroIntegrator, GyroState};
 pub use mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
+pub use pf::{ParticleFilter, PfConfig, PfParams};
 pub use strapdown::{Strapdown, StrapdownError, StrapdownState};

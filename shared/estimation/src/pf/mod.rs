@@ -1,0 +1,1163 @@
+//! Paper 000's attitude particle filter (§III-B-1, eqs. 28-47): particles of
+//! attitude quaternions propagated with the gyro, weighted by their
+//! difference from the attitude the accelerometer and magnetometer give,
+//! resampled when the effective sample size falls, estimated as the weighted
+//! mean; with what the paper leaves out and a user needs: gyro bias
+//! estimation, disturbance rejection and initialisation from the first
+//! samples.
+//!
+//! # State
+//!
+//! Particle `i` (eq. 43) is an attitude `q_i` (body FRD → NED) and, beyond
+//! the paper, a gyro bias `b_i` (FRD, rad/s), with a weight `w_i`. The
+//! estimate is the weighted mean (eq. 47, "the weighted mean of all particle
+//! components"): `q̂ = Σ w_i q_i / ‖Σ w_i q_i‖` with each `q_i` taken with the
+//! sign that agrees with the previous estimate (q and −q are one attitude),
+//! and `b̂ = Σ w_i b_i`.
+//!
+//! # Prediction (P1): eq. 28 with process noise
+//!
+//! ```text
+//! θ_i = (ω̃ − b_i) Δt + η_i,   η_i ~ N(0, σ_g² Δt I)
+//! q_i ← exp(−ω_ie^n Δt) ⊗ q_i ⊗ exp(θ_i)                                  (P1)
+//! b_i ← b_i + ζ_i,   ζ_i ~ N(0, σ_b² Δt_b I), every 16 samples (Δt_b their span)
+//! ```
+//!
+//! Eq. 28 is `q_i ← (q_i + ½ T_s q_i ⊗ [0, ω]) / ‖·‖`, i.e. `q_i ⊗ exp(θ)` to
+//! first order in `|θ|`. Here `exp(θ)` is carried to fourth order,
+//! `[1 − |θ|²/8 + |θ|⁴/384, (½ − |θ|²/48) θ]`, which is unit to `|θ|⁶/4608`
+//! (5e-12 at 16 rad/s and 285 Hz) without a sine or cosine per particle,
+//! and the Earth rate is compensated as in [`crate::gyro`] (one quaternion
+//! for all particles). σ_g is the process noise density: the gyro's angle
+//! random walk plus what the gyro model leaves out (`gyro_noise_deg_s_rt_hz`);
+//! the bias walks with density σ_b, drawn on a 16-sample grid (the same
+//! process sampled coarser, which saves five sixths of the random numbers).
+//!
+//! # Aiding attitude and attitude difference (P2), eqs. 30-42
+//!
+//! The paper forms one aiding quaternion `q_am` from the accelerometer (roll,
+//! pitch) and the magnetometer compensated for them (yaw) ([`aiding`], eqs.
+//! 30-41), and weighs each particle by the component-wise difference
+//! `δ_i = q_am − q_i` (eq. 42). Two changes make the weights separable and
+//! robust, and keep the paper's weights as a special case:
+//!
+//! 1. The difference is taken multiplicatively in the navigation frame,
+//!    `δq_i = q_a ⊗ q_i⁻¹ = [w, x, y, z]`. Right multiplication by a unit
+//!    quaternion preserves the 4-D norm, so `|q_am − q_i|² = (1 − w)² + x² +
+//!    y² + z²`: with one σ for every component, the product of eq. 45 over
+//!    the components is the paper's weight exactly (and the w term, of
+//!    second order, is dropped below). In this frame the components mean
+//!    something: `x, y ≈ ½` the north and east (tilt) error, `z ≈ ½` the down
+//!    (heading) error, whatever the attitude.
+//! 2. Tilt and heading get their own aiding quaternion, so that a disturbed
+//!    sensor can be down-weighted alone, and the heading does not inherit the
+//!    accelerometer's tilt error times the tangent of the dip (2.5 at 68° dip)
+//!    through eq. 40:
+//!
+//! ```text
+//! q_acc = exp(θ_a) ⊗ q̂⁻,   θ_a: the horizontal rotation taking f_lp onto −e_D
+//! q_mag = exp(ψ_e e_D) ⊗ q̂⁻,   ψ_e = wrap(δ − azimuth(q̂⁻ m̃))                (P2)
+//! ```
+//!
+//! `q̂⁻` is the predicted estimate. `q_acc` is the attitude that agrees with
+//! the accelerometer and has the estimate's heading, `q_mag` the one that
+//! agrees with the magnetometer's heading (eq. 40's tilt compensation done
+//! with the estimate's roll and pitch) and has the estimate's tilt. Built on
+//! `q_acc` instead of `q̂⁻`, the heading aiding recomposes the paper's
+//! `q_am` exactly (test `aiding_split_recomposes_q_am`).
+//!
+//! **Low-passed specific force (P2').** `f_lp` is not one sample but the
+//! specific force low-passed in the navigation frame (time constant
+//! `accel_lowpass_s`, 3 s): each sample is rotated into NED with the
+//! estimate half a gyro interval back (it is an interval average, DESIGN
+//! §4), `f_lp ← f_lp + Δt/(τ + Δt) (q̂⁻_mid f̃ − f_lp)`, and after each update
+//! `f_lp` is turned by the update's correction `q̂⁺ ⊗ q̂⁻⁻¹`, so that it is
+//! the low-pass in the gyro-integrated ("almost inertial") frame that VQF
+//! uses (Laidig & Seel, "VQF: Highly accurate IMU orientation estimation
+//! with bias estimation and magnetic disturbance rejection", Information
+//! Fusion 91, 2023). Accelerations that come and go, and the centripetal
+//! acceleration of a turn, average out there; on BROAD it halves the
+//! inclination error (measurements in `launch/src/bench/attitude.rs`). At
+//! rest (P5) the low-pass restarts from each sample.
+//!
+//! A magnetometer sample equal to the previous one is not used: a sensor that
+//! holds its last value between its own, slower, samples (BROAD's does, for
+//! 29 % of the samples) would otherwise weigh a stale heading.
+//!
+//! # Weights (P3): eq. 45 per component
+//!
+//! ```text
+//! w_i ← w_i · N(x_a,i; 0, s_t²) · N(y_a,i; 0, s_t²) · N(z_m,i; 0, s_h²)    (P3)
+//! ```
+//!
+//! with `[·, x_a, y_a, ·] = q_acc ⊗ q_i⁻¹`, `[·, ·, ·, z_m] = q_mag ⊗ q_i⁻¹`
+//! and `s = sin(σ/2)` for the per-sample angle noise σ (a component is half
+//! the sine of the angle). The paper keeps a weight per particle and
+//! component and resamples components separately, which recombines
+//! components of different particles into non-unit quaternions; here a
+//! particle's weight is the product of its component likelihoods (the joint
+//! likelihood of independent component errors) and resampling moves whole
+//! particles. Per sample,
+//!
+//! ```text
+//! σ_t² = σ_f²/(g² Δt) + σ_T²/Δt + ((|f_lp| − g)/g)²
+//! σ_h² = σ_H²/Δt + (σ_m/H)² + (|m̃|/|m_ref| − 1)² + (dip − dip_ref)²        (P4)
+//! ```
+//!
+//! σ_f the accelerometer's noise density, σ_m the magnetometer's noise per
+//! sample and H the reference's horizontal field, σ_T and σ_H the tilt and
+//! heading aiding densities (unmodelled accelerations, magnetic distortion),
+//! and the last terms our adaptive down-weighting: the farther the
+//! low-passed specific force's norm from gravity, or the field's norm and
+//! dip (seen at the estimate) from the reference, the less the sample
+//! counts. Beyond the gates (`accel_gate_m_s2` on `|f_lp| − g`,
+//! `mag_norm_gate`, `mag_dip_gate_deg`) the factor is left out: the
+//! accelerometer during sustained linear acceleration, the magnetometer
+//! during magnetic disturbance.
+//!
+//! # Gyro bias at rest (P5)
+//!
+//! When the sensor has been still for `rest_min_s` (the gyro and the
+//! specific force within their thresholds of their 0.5 s low-pass means, and
+//! the mean rate within the threshold of the bias estimate; the test of VQF,
+//! Laidig & Seel 2023), the gyro measures the bias plus the Earth rate,
+//! `z = ω̃ − Ĉᵀ ω_ie^n`, with the gyro's own scatter about its low-pass mean
+//! σ_r² (per sample, floored at (0.001 °/s)²). The measurement is linear
+//! and Gaussian in the bias alone, so the biases get its Kalman update as a
+//! shift and a contraction of the cloud, per axis:
+//!
+//! ```text
+//! K = P_b / (P_b + σ_r²),   b_i ← b̂ + K (z − b̂) + √(1 − K) (b_i − b̂)      (P5)
+//! ```
+//!
+//! (`P_b` the weighted variance of the biases): exact for a Gaussian cloud,
+//! and, unlike a reweighting, it cannot run out of particles near `z` after
+//! the cloud has narrowed. At rest the specific force is not low-passed
+//! either (nothing to average; the low-pass would only add lag). In motion
+//! the bias is estimated only through the attitude it produces (P3).
+//!
+//! # Resampling (P6): eq. 46 and selection and replacement
+//!
+//! With the weights normalised, `N_eff = 1 / Σ w_i²` (eq. 46). Below
+//! `N_th = resample_threshold · N`, particle `i` is selected `⌊N w_i⌋` times
+//! and the remaining places are replaced by systematic draws on the residual
+//! weights (residual resampling; the paper's "selection and replace",
+//! whose reference [25] is not available here). Copies are then spread by a
+//! Gaussian kernel with shrinkage (Liu & West 2001), which keeps the
+//! weighted mean and covariance of the cloud, in the 6-D space of the
+//! navigation-frame attitude error `δθ_i = log(q_i ⊗ q̂⁻¹)` and the bias:
+//! `x_i ← x̄ + a (x_i − x̄) + h L ε_i`, `L Lᵀ` the cloud's covariance,
+//! `h = (4 / (N (d + 2)))^{1/(d+4)}` (the Gaussian kernel's optimal
+//! bandwidth, d = 6), `a = √(1 − h²)`. Weights are then `1/N`.
+//!
+//! # Progressive correction (P7)
+//!
+//! When one update would leave fewer than `N_th` effective particles (a
+//! likelihood much narrower than the cloud: at the start, or after a gap in
+//! the aiding), it is undone and applied in stages: the largest fraction
+//! `α` of the log-likelihood that keeps `N_eff ≥ N_th` (bisection), then
+//! (P6), then the rest on the new particles, at most 20 stages (progressive
+//! correction, Oudjane & Musso 2000; likelihood tempering). Without it, the
+//! first updates from the initial spread could leave one or two particles,
+//! whose biases were then the whole cloud's for good (observed before this
+//! stage existed, with tilt and heading densities of 0.03 and 0.05 °·√s on
+//! BROAD trial 10: a z bias 1.5 °/s off and a 130° heading RMSE).
+//!
+//! # Initialisation
+//!
+//! [`ParticleFilter::from_first_sample`] takes the paper's `q_am` of the
+//! first specific force and field as the initial attitude, and the field's
+//! norm and dip at it as the magnetic reference; the particles are drawn
+//! around it with the initial standard deviations, the bias around zero
+//! (draws centred, so that the cloud's mean is the initial state).
+//!
+//! # Determinism
+//!
+//! Every random number comes from one ChaCha8 generator seeded by `seed`, and
+//! every loop runs in particle order: the same seed and inputs give the same
+//! output bit for bit. A restore re-seeds the generator from the seed and the
+//! snapshot's bits, so restoring a snapshot twice gives the same particles.
+
+mod aiding;
+mod params;
+mod resample;
+#[cfg(test)]
+mod tests;
+
+pub use aiding::{AidingError, aiding_quaternion, tilt_quaternions};
+pub use params::{MAX_PARTICLES, PfConfig, PfParams, PfParamsError};
+
+use nalgebra::{Matrix6, Quaternion, UnitQuaternion, Vector3, Vector6};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use thiserror::Error;
+
+use crate::attitude::{quat_from_rotation_vector, wrap_pi};
+use crate::earth::{earth_rate_ned, normal_gravity};
+use crate::estimator::{
+    AttitudeEstimator, AttitudeOutput, AttitudeRestoreError, AttitudeStateSnapshot, quat_to_wxyz,
+};
+use crate::mekf::MagneticReference;
+
+/// Samples between two draws of the bias random walk (P1).
+const BIAS_WALK_STRIDE: u32 = 16;
+/// Time constant of the rest detector's low-pass means, s (P5).
+const REST_LOWPASS_S: f64 = 0.5;
+/// Smallest per-sample gyro variance of the bias measurement at rest,
+/// (rad/s)²: (0.001 °/s)².
+const REST_VARIANCE_FLOOR: f64 = 3.046e-10;
+/// Most progressive-correction stages per update (P7); the rest of the
+/// likelihood is then applied at once.
+const MAX_TEMPER_STAGES: usize = 20;
+/// Bisection steps for a stage's fraction (P7).
+const BISECTION_STEPS: u32 = 12;
+
+/// One particle: attitude `[w, x, y, z]` (body → NED), gyro bias (rad/s) and
+/// log weight (64 bytes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Particle {
+    q: [f64; 4],
+    b: [f64; 3],
+    lw: f64,
+}
+
+/// Why a [`ParticleFilter`] could not be made.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+pub enum PfNewError {
+    /// Latitude outside [-π/2, π/2] or NaN.
+    #[error("latitude {0} rad is outside [-pi/2, pi/2]")]
+    LatitudeOutOfRange(f64),
+    /// The declination is not finite.
+    #[error("declination is not finite")]
+    NonFiniteDeclination,
+    /// An initial bias, or a standard deviation, is not finite (or negative).
+    #[error("initial bias or standard deviation is not valid")]
+    BadInitialState,
+    /// No aiding attitude from the first samples.
+    #[error("no attitude from the first samples: {0}")]
+    Aiding(#[from] AidingError),
+    /// The first field gives no magnetic reference.
+    #[error("no magnetic reference from the first field: {0}")]
+    Magnetic(#[from] crate::mekf::MagneticReferenceNewError),
+}
+
+/// Why a gyro sample was refused (the state is unchanged).
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+pub enum PfPropagateError {
+    /// A rate component is NaN or infinite.
+    #[error("gyro sample is not finite")]
+    NonFinite,
+    /// The interval is not a positive finite number of seconds.
+    #[error("interval {0} s is not positive and finite")]
+    BadInterval(f64),
+}
+
+/// What an aiding pair did (each sensor is used, gated or invalid on its own).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AidingUse {
+    /// The sensor weighted the particles.
+    Used,
+    /// Refused by its gate (disturbance).
+    Gated,
+    /// Not finite, zero, or no direction to compare.
+    Invalid,
+    /// The same field as the previous sample: not a new measurement.
+    Repeated,
+}
+
+/// Counts of what the filter did with its inputs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PfStats {
+    /// Gyro samples refused.
+    pub predict_rejected: u64,
+    /// Accelerometer samples that weighted the particles.
+    pub tilt_used: u64,
+    /// Accelerometer samples refused by the gate.
+    pub tilt_gated: u64,
+    /// Accelerometer samples refused as invalid.
+    pub tilt_invalid: u64,
+    /// Magnetometer samples that weighted the particles.
+    pub heading_used: u64,
+    /// Magnetometer samples refused by the norm or dip gate.
+    pub heading_gated: u64,
+    /// Magnetometer samples refused as invalid.
+    pub heading_invalid: u64,
+    /// Samples taken as a bias measurement at rest (P5).
+    pub rest_samples: u64,
+    /// Resamplings (P6), tempering stages included.
+    pub resamples: u64,
+    /// Progressive-correction stages (P7): updates split because one would
+    /// have left fewer than N_th effective particles.
+    pub tempering_stages: u64,
+    /// Magnetometer samples equal to the previous one (a sensor that holds
+    /// its last value between its own, slower, samples), not used.
+    pub heading_repeated: u64,
+}
+
+/// The rest detector's state (P5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Rest {
+    started: bool,
+    gyro_lp: Vector3<f64>,
+    accel_lp: Vector3<f64>,
+    /// Low-passed squared deviation of the gyro from its mean, per axis.
+    gyro_var: f64,
+    still_s: f64,
+}
+
+/// Paper 000's attitude particle filter; see the module documentation.
+#[derive(Debug, Clone)]
+pub struct ParticleFilter {
+    config: PfConfig,
+    particles: Vec<Particle>,
+    /// Scratch: normalised weights of the last update, and resampling buffers.
+    weights: Vec<f64>,
+    scratch: Vec<Particle>,
+    normals: Vec<f64>,
+    delta: Vec<f64>,
+    rng: ChaCha8Rng,
+    q_hat: UnitQuaternion<f64>,
+    bias_hat: Vector3<f64>,
+    /// Weighted spread of the attitude about the estimate, N, E, D, rad.
+    spread: Vector3<f64>,
+    omega_ie_n: Vector3<f64>,
+    gravity_m_s2: f64,
+    declination_rad: f64,
+    magnetic: MagneticReference,
+    /// The last gyro sample and its interval (the update's rest test and
+    /// mid-interval attitude use them).
+    last_gyro: Option<(Vector3<f64>, f64)>,
+    bias_walk_steps: u32,
+    bias_walk_s: f64,
+    rest: Rest,
+    /// The low-passed specific force in the navigation frame (P2').
+    accel_lp: Option<Vector3<f64>>,
+    /// The previous field sample (a repeated one is not new).
+    last_mag: Option<Vector3<f64>>,
+    calibration: u32,
+    stats: PfStats,
+}
+
+fn finite3(v: &Vector3<f64>) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// `exp(θ)` to fourth order in `|θ|` (P1): `[1 − t/8 + t²/384, (½ − t/48) θ]`,
+/// `t = |θ|²`.
+#[inline]
+fn exp_series(theta: [f64; 3]) -> [f64; 4] {
+    let t = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2];
+    let c = 1.0 - t * (1.0 / 8.0) + t * t * (1.0 / 384.0);
+    let s = 0.5 - t * (1.0 / 48.0);
+    [c, s * theta[0], s * theta[1], s * theta[2]]
+}
+
+/// Hamilton product `a ⊗ b` of `[w, x, y, z]` arrays.
+#[inline]
+fn qmul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+fn to_array(q: &UnitQuaternion<f64>) -> [f64; 4] {
+    [q.w, q.i, q.j, q.k]
+}
+
+fn to_unit(q: &[f64; 4]) -> UnitQuaternion<f64> {
+    UnitQuaternion::new_normalize(Quaternion::new(q[0], q[1], q[2], q[3]))
+}
+
+/// FNV-1a over 64-bit words: mixes a snapshot into the restore seed.
+fn fnv1a(words: impl IntoIterator<Item = u64>) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for w in words {
+        for byte in w.to_le_bytes() {
+            h ^= u64::from(byte);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// What one aiding pair says (P3): the factors' precisions `1/(2 s²)` (0:
+/// factor left out) and their references.
+#[derive(Debug, Clone, Copy)]
+struct Aid {
+    k_t: f64,
+    q_acc: [f64; 4],
+    k_h: f64,
+    q_mag: [f64; 4],
+}
+
+/// The log-likelihood of each particle (P3) into `out`.
+fn log_likelihoods(particles: &[Particle], aid: &Aid, out: &mut Vec<f64>) {
+    out.clear();
+    out.extend(particles.iter().map(|p| {
+        let (w, x, y, z) = (p.q[0], p.q[1], p.q[2], p.q[3]);
+        let mut ll = 0.0;
+        if aid.k_t > 0.0 {
+            // x and y of q_acc ⊗ q_i⁻¹.
+            let a = &aid.q_acc;
+            let dx = -a[0] * x + a[1] * w - a[2] * z + a[3] * y;
+            let dy = -a[0] * y + a[1] * z + a[2] * w - a[3] * x;
+            ll -= aid.k_t * (dx * dx + dy * dy);
+        }
+        if aid.k_h > 0.0 {
+            // z of q_mag ⊗ q_i⁻¹.
+            let m = &aid.q_mag;
+            let dz = -m[0] * z - m[1] * y + m[2] * x + m[3] * w;
+            ll -= aid.k_h * dz * dz;
+        }
+        ll
+    }));
+}
+
+/// N_eff (eq. 46) of the weights `∝ exp(lw_i + alpha · delta_i)`.
+fn ess_with(particles: &[Particle], delta: &[f64], alpha: f64) -> f64 {
+    let max = particles
+        .iter()
+        .zip(delta)
+        .map(|(p, d)| p.lw + alpha * d)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if !max.is_finite() {
+        return 0.0;
+    }
+    let (mut sum, mut sum_sq) = (0.0, 0.0);
+    for (p, d) in particles.iter().zip(delta) {
+        let w = (p.lw + alpha * d - max).exp();
+        sum += w;
+        sum_sq += w * w;
+    }
+    sum * sum / sum_sq
+}
+
+/// Weighted sums for the estimate (eq. 47) and the attitude spread, with
+/// weights that need not be normalised: quaternion components sign-aligned
+/// with a reference, biases, and the small-angle error `2 vec(q_i ⊗ r⁻¹)`
+/// (exact to third order) and its square per N, E, D axis.
+#[derive(Debug, Clone, Copy)]
+struct Moments {
+    r: [f64; 4],
+    r_inv: [f64; 4],
+    w: f64,
+    q: [f64; 4],
+    b: [f64; 3],
+    d: [f64; 3],
+    d2: [f64; 3],
+}
+
+impl Moments {
+    fn new(reference: &UnitQuaternion<f64>) -> Self {
+        Self {
+            r: to_array(reference),
+            r_inv: to_array(&reference.inverse()),
+            w: 0.0,
+            q: [0.0; 4],
+            b: [0.0; 3],
+            d: [0.0; 3],
+            d2: [0.0; 3],
+        }
+    }
+
+    #[inline]
+    fn add(&mut self, p: &Particle, w: f64) {
+        let dot = p.q[0] * self.r[0] + p.q[1] * self.r[1] + p.q[2] * self.r[2] + p.q[3] * self.r[3];
+        let ws = if dot < 0.0 { -w } else { w };
+        for k in 0..4 {
+            self.q[k] += ws * p.q[k];
+        }
+        for k in 0..3 {
+            self.b[k] += w * p.b[k];
+        }
+        let e = qmul(&p.q, &self.r_inv);
+        let s = if e[0] < 0.0 { -2.0 } else { 2.0 };
+        for k in 0..3 {
+            let v = s * e[k + 1];
+            self.d[k] += w * v;
+            self.d2[k] += w * v * v;
+        }
+        self.w += w;
+    }
+}
+
+impl ParticleFilter {
+    /// A filter whose particles are drawn around `q_nb` (tilt and heading 1σ
+    /// from `config`) with biases around zero, at geodetic latitude
+    /// `latitude_rad`, with declination `declination_rad` (east positive) and
+    /// the expected field `magnetic`.
+    pub fn new(
+        config: &PfConfig,
+        q_nb: UnitQuaternion<f64>,
+        latitude_rad: f64,
+        declination_rad: f64,
+        magnetic: MagneticReference,
+    ) -> Result<Self, PfNewError> {
+        if !(latitude_rad.abs() <= std::f64::consts::FRAC_PI_2) {
+            return Err(PfNewError::LatitudeOutOfRange(latitude_rad));
+        }
+        if !declination_rad.is_finite() {
+            return Err(PfNewError::NonFiniteDeclination);
+        }
+        let n = config.particles;
+        let mut pf = Self {
+            config: *config,
+            particles: vec![
+                Particle {
+                    q: to_array(&q_nb),
+                    b: [0.0; 3],
+                    lw: 0.0,
+                };
+                n
+            ],
+            weights: vec![1.0 / n as f64; n],
+            scratch: Vec::with_capacity(n),
+            normals: Vec::with_capacity(3 * n),
+            delta: Vec::with_capacity(n),
+            rng: ChaCha8Rng::seed_from_u64(config.seed),
+            q_hat: q_nb,
+            bias_hat: Vector3::zeros(),
+            spread: Vector3::zeros(),
+            omega_ie_n: earth_rate_ned(latitude_rad),
+            gravity_m_s2: normal_gravity(latitude_rad, 0.0),
+            declination_rad,
+            magnetic,
+            last_gyro: None,
+            bias_walk_steps: 0,
+            bias_walk_s: 0.0,
+            rest: Rest {
+                started: false,
+                gyro_lp: Vector3::zeros(),
+                accel_lp: Vector3::zeros(),
+                gyro_var: 0.0,
+                still_s: 0.0,
+            },
+            accel_lp: None,
+            last_mag: None,
+            calibration: 0,
+            stats: PfStats::default(),
+        };
+        let t = config.initial_tilt_std_rad;
+        let h = config.initial_heading_std_rad;
+        let b = config.initial_bias_std_rad_s;
+        let cov = Matrix6::from_diagonal(&Vector6::new(t * t, t * t, h * h, b * b, b * b, b * b));
+        pf.draw_particles(&q_nb, &Vector3::zeros(), &cov);
+        Ok(pf)
+    }
+
+    /// A filter initialised from the first accelerometer and magnetometer
+    /// samples: the attitude is paper 000's `q_am` (eqs. 30-41) of the pair,
+    /// the magnetic reference the field's norm and dip at that attitude.
+    pub fn from_first_sample(
+        config: &PfConfig,
+        accel_m_s2: &Vector3<f64>,
+        mag_ut: &Vector3<f64>,
+        latitude_rad: f64,
+        declination_rad: f64,
+    ) -> Result<Self, PfNewError> {
+        let q = aiding_quaternion(accel_m_s2, mag_ut, declination_rad)?;
+        let reference = MagneticReference::from_mean_field(&q, mag_ut)?;
+        Self::new(config, q, latitude_rad, declination_rad, reference)
+    }
+
+    /// Redraws the biases around `gyro_bias` (FRD, rad/s) with `std_rad_s` 1σ
+    /// per axis, e.g. a static calibration's gyro offset (paper 000 §IV-A).
+    pub fn with_initial_bias(
+        mut self,
+        gyro_bias: Vector3<f64>,
+        std_rad_s: f64,
+    ) -> Result<Self, PfNewError> {
+        if !(finite3(&gyro_bias) && std_rad_s >= 0.0 && std_rad_s.is_finite()) {
+            return Err(PfNewError::BadInitialState);
+        }
+        for p in &mut self.particles {
+            for k in 0..3 {
+                let e: f64 = StandardNormal.sample(&mut self.rng);
+                p.b[k] = gyro_bias[k] + std_rad_s * e;
+            }
+        }
+        self.refresh_estimate();
+        Ok(self)
+    }
+
+    /// Redraws the attitudes around the estimate with `tilt_std_rad` (north,
+    /// east) and `heading_std_rad` (down) 1σ, e.g. after an alignment made
+    /// while the vehicle moved.
+    pub fn with_initial_attitude_std(
+        mut self,
+        tilt_std_rad: f64,
+        heading_std_rad: f64,
+    ) -> Result<Self, PfNewError> {
+        let ok = |v: f64| v >= 0.0 && v.is_finite();
+        if !(ok(tilt_std_rad) && ok(heading_std_rad)) {
+            return Err(PfNewError::BadInitialState);
+        }
+        let q0 = self.q_hat;
+        for p in &mut self.particles {
+            let mut e = [0.0; 3];
+            for (k, v) in e.iter_mut().enumerate() {
+                let n: f64 = StandardNormal.sample(&mut self.rng);
+                *v = n * if k < 2 { tilt_std_rad } else { heading_std_rad };
+            }
+            p.q = to_array(&(quat_from_rotation_vector(&Vector3::from(e)) * q0));
+        }
+        self.refresh_estimate();
+        Ok(self)
+    }
+
+    /// Sets the calibration bits reported in snapshots.
+    pub fn with_calibration(mut self, calibration: u32) -> Self {
+        self.calibration = calibration;
+        self
+    }
+
+    /// The attitude estimate, body → NED.
+    pub fn q_nb(&self) -> UnitQuaternion<f64> {
+        self.q_hat
+    }
+
+    /// The gyro bias estimate, FRD, rad/s.
+    pub fn gyro_bias(&self) -> Vector3<f64> {
+        self.bias_hat
+    }
+
+    /// What the filter did with its inputs so far.
+    pub fn stats(&self) -> PfStats {
+        self.stats
+    }
+
+    /// The expected field.
+    pub fn magnetic_reference(&self) -> MagneticReference {
+        self.magnetic
+    }
+
+    /// The number of particles.
+    pub fn len(&self) -> usize {
+        self.particles.len()
+    }
+
+    /// Always false (a filter has at least two particles).
+    pub fn is_empty(&self) -> bool {
+        self.particles.is_empty()
+    }
+
+    /// Effective sample size of the current weights (eq. 46).
+    pub fn effective_sample_size(&self) -> f64 {
+        1.0 / self.weights.iter().map(|w| w * w).sum::<f64>()
+    }
+
+    /// Weighted sample covariance of the attitude error about N, E, D
+    /// (`δθ_i = log(q_i ⊗ q̂⁻¹)`, rad) and the bias (rad/s), 6×6.
+    pub fn covariance(&self) -> Matrix6<f64> {
+        resample::cloud_covariance(&self.particles, &self.weights, &self.q_hat, &self.bias_hat)
+    }
+
+    /// Whether the rest detector currently holds the sensor still (P5).
+    pub fn at_rest(&self) -> bool {
+        self.rest.still_s >= self.config.rest_min_s
+    }
+
+    /// Draws every particle from N(`q` ⊕ δθ, `b` + δb) with covariance `cov`
+    /// (attitude error in NED, then bias), the draws centred on their sample
+    /// mean so that the cloud's mean is `q`, `b`; equal weights.
+    fn draw_particles(&mut self, q: &UnitQuaternion<f64>, b: &Vector3<f64>, cov: &Matrix6<f64>) {
+        let l = resample::cholesky_floor(cov);
+        let n = self.particles.len();
+        let draws: Vec<Vector6<f64>> = (0..n)
+            .map(|_| l * Vector6::from_fn(|_, _| StandardNormal.sample(&mut self.rng)))
+            .collect();
+        let mean = draws.iter().sum::<Vector6<f64>>() / n as f64;
+        for (p, x) in self.particles.iter_mut().zip(&draws) {
+            let x = x - mean;
+            let dq = quat_from_rotation_vector(&Vector3::new(x[0], x[1], x[2]));
+            p.q = to_array(&(dq * q));
+            p.b = [b.x + x[3], b.y + x[4], b.z + x[5]];
+            p.lw = 0.0;
+        }
+        self.weights.iter_mut().for_each(|w| *w = 1.0 / n as f64);
+        self.q_hat = *q;
+        self.refresh_estimate();
+    }
+
+    /// The weighted means (eq. 47) with the current weights: attitude
+    /// components sign-aligned with the previous estimate, renormalised; bias;
+    /// and the attitude spread.
+    fn refresh_estimate(&mut self) {
+        let mut m = Moments::new(&self.q_hat);
+        for (p, &w) in self.particles.iter().zip(&self.weights) {
+            m.add(p, w);
+        }
+        self.finish_moments(&m);
+    }
+
+    /// Takes the estimate and spread from accumulated moments (unchanged if
+    /// they are not finite).
+    fn finish_moments(&mut self, m: &Moments) {
+        let q = Quaternion::new(m.q[0], m.q[1], m.q[2], m.q[3]);
+        if q.norm() > 0.0 && q.coords.iter().all(|v| v.is_finite()) {
+            self.q_hat = UnitQuaternion::new_normalize(q);
+        }
+        if m.w > 0.0 {
+            let b = Vector3::from(m.b) / m.w;
+            if finite3(&b) {
+                self.bias_hat = b;
+            }
+            let spread = Vector3::from_fn(|k, _| {
+                let mean = m.d[k] / m.w;
+                (m.d2[k] / m.w - mean * mean).max(0.0).sqrt()
+            });
+            if finite3(&spread) {
+                self.spread = spread;
+            }
+        }
+    }
+
+    /// Prediction (P1) over `dt_s` with the average rate `gyro_rad_s`.
+    /// Refused (state unchanged) if the rate is not finite or the interval
+    /// not positive and finite.
+    pub fn propagate(
+        &mut self,
+        gyro_rad_s: &Vector3<f64>,
+        dt_s: f64,
+    ) -> Result<(), PfPropagateError> {
+        if !finite3(gyro_rad_s) {
+            return Err(PfPropagateError::NonFinite);
+        }
+        if !(dt_s > 0.0 && dt_s.is_finite()) {
+            return Err(PfPropagateError::BadInterval(dt_s));
+        }
+        let nav = to_array(&quat_from_rotation_vector(&(-self.omega_ie_n * dt_s)));
+        let sigma = self.config.gyro_noise_rad_rt_s * dt_s.sqrt();
+        let n = self.particles.len();
+        self.normals.clear();
+        for _ in 0..3 * n {
+            let e: f64 = StandardNormal.sample(&mut self.rng);
+            self.normals.push(e * sigma);
+        }
+        let w = [gyro_rad_s.x, gyro_rad_s.y, gyro_rad_s.z];
+        for (p, eta) in self.particles.iter_mut().zip(self.normals.chunks_exact(3)) {
+            let theta = [
+                (w[0] - p.b[0]) * dt_s + eta[0],
+                (w[1] - p.b[1]) * dt_s + eta[1],
+                (w[2] - p.b[2]) * dt_s + eta[2],
+            ];
+            let q = qmul(&nav, &qmul(&p.q, &exp_series(theta)));
+            // One Newton step towards unit norm (the factors are unit to 5e-12).
+            let n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+            let k = 1.5 - 0.5 * n2;
+            p.q = [q[0] * k, q[1] * k, q[2] * k, q[3] * k];
+        }
+        // Bias random walk on a coarser grid (P1).
+        self.bias_walk_steps += 1;
+        self.bias_walk_s += dt_s;
+        if self.bias_walk_steps >= BIAS_WALK_STRIDE {
+            let s = self.config.gyro_bias_walk_rad_s_rt_s * self.bias_walk_s.sqrt();
+            if s > 0.0 {
+                for p in self.particles.iter_mut() {
+                    for k in 0..3 {
+                        let e: f64 = StandardNormal.sample(&mut self.rng);
+                        p.b[k] += s * e;
+                    }
+                }
+            }
+            self.bias_walk_steps = 0;
+            self.bias_walk_s = 0.0;
+        }
+        // The predicted estimate: the previous one moved by the mean rate (the
+        // weighted mean of the moved particles to second order in their
+        // spread; the update takes the exact mean).
+        let rate = gyro_rad_s - self.bias_hat;
+        self.q_hat = UnitQuaternion::new_normalize(
+            (to_unit(&nav) * self.q_hat * quat_from_rotation_vector(&(rate * dt_s))).into_inner(),
+        );
+        self.last_gyro = Some((*gyro_rad_s, dt_s));
+        Ok(())
+    }
+
+    /// The rest test (P5) with the latest gyro and accelerometer samples.
+    fn update_rest(&mut self, accel_m_s2: &Vector3<f64>) -> bool {
+        let Some((gyro, dt)) = self.last_gyro else {
+            return false;
+        };
+        if !self.rest.started {
+            self.rest = Rest {
+                started: true,
+                gyro_lp: gyro,
+                accel_lp: *accel_m_s2,
+                gyro_var: self.config.gyro_noise_rad_rt_s.powi(2) / dt,
+                still_s: 0.0,
+            };
+            return false;
+        }
+        let alpha = dt / (REST_LOWPASS_S + dt);
+        self.rest.gyro_lp += (gyro - self.rest.gyro_lp) * alpha;
+        let dev2 = (gyro - self.rest.gyro_lp).norm_squared() / 3.0;
+        self.rest.gyro_var += (dev2 - self.rest.gyro_var) * alpha;
+        self.rest.accel_lp += (accel_m_s2 - self.rest.accel_lp) * alpha;
+        let th_g = self.config.rest_gyro_rad_s;
+        let still = (gyro - self.rest.gyro_lp).norm() <= th_g
+            && (accel_m_s2 - self.rest.accel_lp).norm() <= self.config.rest_accel_m_s2
+            && (self.rest.gyro_lp - self.bias_hat).norm() <= th_g;
+        self.rest.still_s = if still { self.rest.still_s + dt } else { 0.0 };
+        self.at_rest()
+    }
+
+    /// Updates (P2)-(P6) with one specific force (m/s², FRD) and one
+    /// calibrated field (µT, FRD); returns what each sensor did.
+    pub fn update_aiding(
+        &mut self,
+        accel_m_s2: &Vector3<f64>,
+        mag_ut: &Vector3<f64>,
+    ) -> (AidingUse, AidingUse) {
+        let dt = self.last_gyro.map_or(0.01, |(_, dt)| dt);
+        let accel_ok = finite3(accel_m_s2) && accel_m_s2.norm() > 0.0;
+        let rest = accel_ok && self.update_rest(accel_m_s2);
+
+        // (P2)/(P4), tilt.
+        let g = self.gravity_m_s2;
+        let mut tilt = AidingUse::Invalid;
+        let mut k_t = 0.0;
+        let mut q_acc = [0.0; 4];
+        if accel_ok {
+            // The specific force in the navigation frame, with the estimate
+            // half a gyro interval back (an interval average), low-passed
+            // there (P2'): accelerations that come and go average out.
+            let half_back = match self.last_gyro {
+                Some((w, dt)) => quat_from_rotation_vector(&((self.bias_hat - w) * (0.5 * dt))),
+                None => UnitQuaternion::identity(),
+            };
+            let f_n = (self.q_hat * half_back) * accel_m_s2;
+            // At rest there is nothing to average: the low-pass restarts
+            // from the current sample, without its lag.
+            let tau = self.config.accel_lowpass_s;
+            self.accel_lp = match self.accel_lp {
+                Some(lp) if tau > 0.0 && !rest => Some(lp + (f_n - lp) * (dt / (tau + dt))),
+                _ => Some(f_n),
+            };
+            let lp = self.accel_lp.unwrap_or(f_n);
+            let norm = lp.norm();
+            let deviation = norm - g;
+            if !(deviation.abs() <= self.config.accel_gate_m_s2 && norm > 0.0) {
+                tilt = AidingUse::Gated;
+            } else {
+                let v = lp / norm;
+                let r = Vector3::new(0.0, 0.0, -1.0);
+                let axis = v.cross(&r);
+                let s = axis.norm();
+                let theta = if s > 0.0 {
+                    axis * (s.atan2(v.dot(&r)) / s)
+                } else {
+                    Vector3::zeros()
+                };
+                let var = self.config.accel_noise_m_s2_rt_hz.powi(2) / (dt * g * g)
+                    + self.config.tilt_noise_rad_rt_s.powi(2) / dt
+                    + (deviation / g).powi(2);
+                let s_t = (0.5 * var.sqrt()).sin();
+                k_t = 0.5 / (s_t * s_t);
+                q_acc = to_array(&(quat_from_rotation_vector(&theta) * self.q_hat));
+                tilt = AidingUse::Used;
+            }
+        }
+
+        // (P2)/(P4), heading.
+        let mut heading = AidingUse::Invalid;
+        let mut k_h = 0.0;
+        let mut q_mag = [0.0; 4];
+        let m_norm = mag_ut.norm();
+        let repeated = self.last_mag == Some(*mag_ut);
+        self.last_mag = Some(*mag_ut);
+        if repeated {
+            heading = AidingUse::Repeated;
+        } else if finite3(mag_ut) && m_norm > 0.0 {
+            let ratio = m_norm / self.magnetic.field_ut();
+            let m_n = self.q_hat * mag_ut;
+            let horizontal = m_n.x.hypot(m_n.y);
+            let dip = m_n.z.atan2(horizontal);
+            let dip_diff = dip - self.magnetic.dip_rad();
+            if !(horizontal > 0.0) {
+                heading = AidingUse::Invalid;
+            } else if !((ratio - 1.0).abs() <= self.config.mag_norm_gate
+                && dip_diff.abs() <= self.config.mag_dip_gate_rad)
+            {
+                heading = AidingUse::Gated;
+            } else {
+                let psi = wrap_pi(self.declination_rad - m_n.y.atan2(m_n.x));
+                let var = self.config.heading_noise_rad_rt_s.powi(2) / dt
+                    + (self.config.mag_noise_ut
+                        / (self.magnetic.field_ut() * self.magnetic.dip_rad().cos()))
+                    .powi(2)
+                    + (ratio - 1.0).powi(2)
+                    + dip_diff * dip_diff;
+                let s_h = (0.5 * var.sqrt()).sin();
+                k_h = 0.5 / (s_h * s_h);
+                q_mag = to_array(&(quat_from_rotation_vector(&(Vector3::z() * psi)) * self.q_hat));
+                heading = AidingUse::Used;
+            }
+        }
+
+        // (P5): the gyro as a bias measurement at rest.
+        if let (true, Some((w, _))) = (rest, self.last_gyro) {
+            let earth_b = self.q_hat.inverse_transform_vector(&self.omega_ie_n);
+            self.rest_bias_update(&(w - earth_b));
+            self.stats.rest_samples += 1;
+        }
+
+        match tilt {
+            AidingUse::Used => self.stats.tilt_used += 1,
+            AidingUse::Gated => self.stats.tilt_gated += 1,
+            AidingUse::Invalid | AidingUse::Repeated => self.stats.tilt_invalid += 1,
+        }
+        match heading {
+            AidingUse::Used => self.stats.heading_used += 1,
+            AidingUse::Gated => self.stats.heading_gated += 1,
+            AidingUse::Invalid => self.stats.heading_invalid += 1,
+            AidingUse::Repeated => self.stats.heading_repeated += 1,
+        }
+        if k_t == 0.0 && k_h == 0.0 {
+            return (tilt, heading);
+        }
+
+        // (P3), with progressive correction (P7).
+        let prior = self.q_hat;
+        let aid = Aid {
+            k_t,
+            q_acc,
+            k_h,
+            q_mag,
+        };
+        let n = self.particles.len() as f64;
+        let n_th = self.config.resample_threshold * n;
+        let mut delta = std::mem::take(&mut self.delta);
+        let mut remaining = 1.0;
+        for stage in 0..=MAX_TEMPER_STAGES {
+            log_likelihoods(&self.particles, &aid, &mut delta);
+            let sum_sq = self.apply_log_likelihoods(&delta, remaining);
+            if stage == MAX_TEMPER_STAGES || n_th < 1.0 || 1.0 / sum_sq >= n_th {
+                // (P6): eq. 46 and resampling.
+                if 1.0 / sum_sq < n_th {
+                    self.resample();
+                }
+                break;
+            }
+            // (P7): too few effective particles for the whole likelihood.
+            // Undo it, apply the largest fraction that keeps N_eff at N_th
+            // (bisection; N_eff falls as the fraction grows), resample, go on.
+            for (p, d) in self.particles.iter_mut().zip(&delta) {
+                p.lw -= remaining * d;
+            }
+            let (mut lo, mut hi) = (0.0, remaining);
+            for _ in 0..BISECTION_STEPS {
+                let mid = 0.5 * (lo + hi);
+                if ess_with(&self.particles, &delta, mid) >= n_th {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let alpha = lo.max(remaining / f64::from(1u32 << BISECTION_STEPS));
+            self.apply_log_likelihoods(&delta, alpha);
+            remaining -= alpha;
+            self.stats.tempering_stages += 1;
+            self.resample();
+        }
+        self.delta = delta;
+        // The low-passed specific force follows the correction (P2').
+        if let Some(lp) = self.accel_lp {
+            self.accel_lp = Some((self.q_hat * prior.inverse()) * lp);
+        }
+        (tilt, heading)
+    }
+
+    /// (P5): the Kalman update of the biases with the measurement `z` (rad/s)
+    /// of variance σ_r² per axis, applied to the cloud as a shift and a
+    /// contraction (per axis: `K = P/(P + σ_r²)`, mean `b̂ + K (z − b̂)`,
+    /// deviations scaled by `√(1 − K)`). The measurement is linear and
+    /// Gaussian in the bias alone, so this is the exact update of a Gaussian
+    /// cloud; unlike a reweighting it cannot run out of particles near `z`.
+    fn rest_bias_update(&mut self, z: &Vector3<f64>) {
+        let r = self.rest.gyro_var.max(REST_VARIANCE_FLOOR);
+        let mut var = [0.0; 3];
+        for (p, &w) in self.particles.iter().zip(&self.weights) {
+            for (k, v) in var.iter_mut().enumerate() {
+                let d = p.b[k] - self.bias_hat[k];
+                *v += w * d * d;
+            }
+        }
+        let mut shift = [0.0; 3];
+        let mut scale = [1.0; 3];
+        for (k, (sh, sc)) in shift.iter_mut().zip(scale.iter_mut()).enumerate() {
+            let gain = var[k] / (var[k] + r);
+            *sh = gain * (z[k] - self.bias_hat[k]);
+            *sc = (1.0 - gain).sqrt();
+        }
+        if !(shift.iter().chain(&scale).all(|v| v.is_finite())) {
+            return;
+        }
+        let b_hat = self.bias_hat;
+        for p in self.particles.iter_mut() {
+            for (k, b) in p.b.iter_mut().enumerate() {
+                *b = b_hat[k] + shift[k] + scale[k] * (*b - b_hat[k]);
+            }
+        }
+        self.bias_hat += Vector3::from(shift);
+    }
+
+    /// Adds `alpha` times the log-likelihoods to the log weights, normalises
+    /// the weights and takes the estimate in the same pass; returns `Σ w_i²`.
+    fn apply_log_likelihoods(&mut self, delta: &[f64], alpha: f64) -> f64 {
+        let mut max_lw = f64::NEG_INFINITY;
+        for (p, d) in self.particles.iter_mut().zip(delta) {
+            p.lw += alpha * d;
+            max_lw = max_lw.max(p.lw);
+        }
+        if !max_lw.is_finite() {
+            // Cannot happen with finite inputs; keep the previous weights.
+            for (p, w) in self.particles.iter_mut().zip(&self.weights) {
+                p.lw = w.ln();
+            }
+            return self.weights.iter().map(|w| w * w).sum();
+        }
+        let mut m = Moments::new(&self.q_hat);
+        let mut sum_sq = 0.0;
+        for (p, w) in self.particles.iter_mut().zip(self.weights.iter_mut()) {
+            p.lw -= max_lw;
+            *w = p.lw.exp();
+            sum_sq += *w * *w;
+            m.add(p, *w);
+        }
+        let sum = m.w;
+        for w in self.weights.iter_mut() {
+            *w /= sum;
+        }
+        self.finish_moments(&m);
+        sum_sq / (sum * sum)
+    }
+
+    /// (P6): residual resampling, then the shrinkage kernel; equal weights.
+    fn resample(&mut self) {
+        let cov = self.covariance();
+        let l = resample::cholesky_floor(&cov);
+        resample::residual(
+            &self.particles,
+            &self.weights,
+            &mut self.scratch,
+            &mut self.rng,
+        );
+        std::mem::swap(&mut self.particles, &mut self.scratch);
+        resample::regularise(
+            &mut self.particles,
+            &self.q_hat,
+            &self.bias_hat,
+            &l,
+            &mut self.rng,
+        );
+        let n = self.particles.len() as f64;
+        self.weights.iter_mut().for_each(|w| *w = 1.0 / n);
+        self.refresh_estimate();
+        self.stats.resamples += 1;
+    }
+}
+
+impl AttitudeEstimator for ParticleFilter {
+    /// [`ParticleFilter::propagate`]; a refused sample is counted in
+    /// [`PfStats::predict_rejected`].
+    fn predict(&mut self, gyro_rad_s: &Vector3<f64>, dt_s: f64) {
+        if self.propagate(gyro_rad_s, dt_s).is_err() {
+            self.stats.predict_rejected += 1;
+        }
+    }
+
+    /// [`ParticleFilter::update_aiding`] (counted in [`PfStats`]).
+    fn update(&mut self, accel_m_s2: &Vector3<f64>, mag_ut: &Vector3<f64>) {
+        self.update_aiding(accel_m_s2, mag_ut);
+    }
+
+    /// The weighted-mean attitude and bias; `std_rad` from the particles'
+    /// weighted spread about the estimate (N, E, D).
+    fn estimate(&self) -> AttitudeOutput {
+        AttitudeOutput {
+            q_nb: self.q_hat,
+            std_rad: self.spread,
+            gyro_bias: self.bias_hat,
+        }
+    }
+
+    /// Attitude, bias, the weighted sample covariance of the particles (6×6,
+    /// row-major) and the calibration bits.
+    fn snapshot(&self) -> AttitudeStateSnapshot {
+        let p = self.covariance();
+        let mut covariance = [[0.0; 6]; 6];
+        for (i, row) in covariance.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = p[(i, j)];
+            }
+        }
+        AttitudeStateSnapshot {
+            q: quat_to_wxyz(&self.q_hat),
+            gyro_bias: self.bias_hat.into(),
+            covariance,
+            calibration: self.calibration,
+        }
+    }
+
+    /// Re-seeds the particles around the snapshot: drawn from N(mean,
+    /// covariance) of the snapshot (the configured initial covariance when it
+    /// is all zeros, e.g. from the `gyro` variant), with the generator
+    /// re-seeded from the configured seed and the snapshot's bits, so the
+    /// same snapshot always gives the same particles. Keeps the parameters,
+    /// site and magnetic reference; the rest detector starts over.
+    fn restore(&mut self, s: &AttitudeStateSnapshot) -> Result<(), AttitudeRestoreError> {
+        let (q, b) = s.checked()?;
+        let cov = Matrix6::from_fn(|i, j| s.covariance[i][j]);
+        let cov = if cov.iter().all(|v| *v == 0.0) {
+            let t = self.config.initial_tilt_std_rad;
+            let h = self.config.initial_heading_std_rad;
+            let sb = self.config.initial_bias_std_rad_s;
+            Matrix6::from_diagonal(&Vector6::new(
+                t * t,
+                t * t,
+                h * h,
+                sb * sb,
+                sb * sb,
+                sb * sb,
+            ))
+        } else {
+            let scale = cov.diagonal().amax();
+            if (cov - cov.transpose()).amax() > 1e-9 * scale
+                || !cov.diagonal().iter().all(|d| *d > 0.0)
+            {
+                return Err(AttitudeRestoreError::NotCovariance);
+            }
+            cov
+        };
+        let words =
+            s.q.iter()
+                .chain(&s.gyro_bias)
+                .chain(s.covariance.iter().flatten())
+                .map(|v| v.to_bits())
+                .chain([u64::from(s.calibration)]);
+        self.rng = ChaCha8Rng::seed_from_u64(self.config.seed ^ fnv1a(words));
+        self.draw_particles(&q, &b, &cov);
+        // The snapshot's quaternion bit for bit when it is unit to rounding
+        // (a restored instance continues from exactly the published state).
+        let raw = Quaternion::new(s.q[0], s.q[1], s.q[2], s.q[3]);
+        self.q_hat = if (raw.norm() - 1.0).abs() <= 4.0 * f64::EPSILON {
+            UnitQuaternion::new_unchecked(raw)
+        } else {
+            q
+        };
+        self.bias_hat = b;
+        self.calibration = s.calibration;
+        self.last_gyro = None;
+        self.rest.started = false;
+        self.rest.still_s = 0.0;
+        self.accel_lp = None;
+        self.bias_walk_steps = 0;
+        self.bias_walk_s = 0.0;
+        Ok(())
+    }
+}
