@@ -33,6 +33,7 @@ pub mod earth;
 pub mod estimator;
 pub mod gyro;
 pub mod mekf;
+pub mod params;
 pub mod pf;
 pub mod strapdown;
 

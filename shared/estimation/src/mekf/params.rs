@@ -2,6 +2,7 @@
 //! units, every field defaulted, unknown keys refused) and [`MekfConfig`], the
 //! checked SI values the filter uses.
 
+use crate::params::{nonneg, positive};
 use serde::Deserialize;
 use thiserror::Error;
 
@@ -150,20 +151,13 @@ pub struct MekfConfig {
     pub(super) initial_bias_std_rad_s: f64,
 }
 
-/// `lo <= value <= hi` (or `lo < value` when `open_low`), false for NaN.
-fn in_range(
-    name: &'static str,
-    value: f64,
-    lo: f64,
-    hi: f64,
-    open_low: bool,
-    range: &'static str,
-) -> Result<f64, MekfParamsError> {
-    let low_ok = if open_low { value > lo } else { value >= lo };
-    if low_ok && value <= hi {
-        Ok(value)
-    } else {
-        Err(MekfParamsError::OutOfRange { name, value, range })
+impl From<crate::params::OutOfRange> for MekfParamsError {
+    fn from(e: crate::params::OutOfRange) -> Self {
+        Self::OutOfRange {
+            name: e.name,
+            value: e.value,
+            range: e.range,
+        }
     }
 }
 
@@ -171,8 +165,6 @@ impl TryFrom<&MekfParams> for MekfConfig {
     type Error = MekfParamsError;
 
     fn try_from(p: &MekfParams) -> Result<Self, Self::Error> {
-        let nonneg = |name, v| in_range(name, v, 0.0, 1e6, false, "[0, 1e6]");
-        let positive = |name, v| in_range(name, v, 0.0, 1e6, true, "(0, 1e6]");
         let gyro_noise = nonneg("gyro_noise_deg_s_rt_hz", p.gyro_noise_deg_s_rt_hz)?;
         let bias_instability =
             nonneg("gyro_bias_instability_deg_h", p.gyro_bias_instability_deg_h)?;
@@ -184,7 +176,7 @@ impl TryFrom<&MekfParams> for MekfConfig {
         let accel_gate = positive("accel_gate_m_s2", p.accel_gate_m_s2)?;
         let heading_sigma = positive("mag_heading_sigma_deg", p.mag_heading_sigma_deg)?;
         let norm_gate = positive("mag_norm_gate", p.mag_norm_gate)?;
-        let dip_gate = in_range(
+        let dip_gate = crate::params::in_range(
             "mag_dip_gate_deg",
             p.mag_dip_gate_deg,
             0.0,

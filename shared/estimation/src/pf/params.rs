@@ -2,6 +2,7 @@
 //! (datasheet units, every field defaulted, unknown keys refused) and
 //! [`PfConfig`], the checked SI values the filter uses.
 
+use crate::params::{nonneg, positive};
 use serde::Deserialize;
 use thiserror::Error;
 
@@ -173,19 +174,13 @@ pub struct PfConfig {
 /// Largest particle count accepted (memory: 64 bytes a particle).
 pub const MAX_PARTICLES: usize = 1_000_000;
 
-fn in_range(
-    name: &'static str,
-    value: f64,
-    lo: f64,
-    hi: f64,
-    open_low: bool,
-    range: &'static str,
-) -> Result<f64, PfParamsError> {
-    let low_ok = if open_low { value > lo } else { value >= lo };
-    if low_ok && value <= hi {
-        Ok(value)
-    } else {
-        Err(PfParamsError::OutOfRange { name, value, range })
+impl From<crate::params::OutOfRange> for PfParamsError {
+    fn from(e: crate::params::OutOfRange) -> Self {
+        Self::OutOfRange {
+            name: e.name,
+            value: e.value,
+            range: e.range,
+        }
     }
 }
 
@@ -193,8 +188,6 @@ impl TryFrom<&PfParams> for PfConfig {
     type Error = PfParamsError;
 
     fn try_from(p: &PfParams) -> Result<Self, Self::Error> {
-        let nonneg = |name, v| in_range(name, v, 0.0, 1e6, false, "[0, 1e6]");
-        let positive = |name, v| in_range(name, v, 0.0, 1e6, true, "(0, 1e6]");
         if !(2..=MAX_PARTICLES).contains(&p.particles) {
             return Err(PfParamsError::OutOfRange {
                 name: "particles",
@@ -209,7 +202,7 @@ impl TryFrom<&PfParams> for PfConfig {
         let tilt = positive("tilt_noise_deg_rt_s", p.tilt_noise_deg_rt_s)?;
         let heading = positive("heading_noise_deg_rt_s", p.heading_noise_deg_rt_s)?;
         let lowpass = nonneg("accel_lowpass_s", p.accel_lowpass_s)?;
-        let threshold = in_range(
+        let threshold = crate::params::in_range(
             "resample_threshold",
             p.resample_threshold,
             0.0,
@@ -219,7 +212,7 @@ impl TryFrom<&PfParams> for PfConfig {
         )?;
         let accel_gate = positive("accel_gate_m_s2", p.accel_gate_m_s2)?;
         let norm_gate = positive("mag_norm_gate", p.mag_norm_gate)?;
-        let dip_gate = in_range(
+        let dip_gate = crate::params::in_range(
             "mag_dip_gate_deg",
             p.mag_dip_gate_deg,
             0.0,
