@@ -6,9 +6,13 @@ use clap::{Parser, Subcommand};
 
 mod bench;
 mod children;
+mod eval;
+mod export;
 mod launch;
+mod logcmd;
 mod monitor;
 mod pipeline;
+mod report;
 mod supervisor;
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
@@ -59,6 +63,25 @@ enum Command {
         #[arg(long)]
         namespace: Option<String>,
     },
+    /// Attach a logger to the running pipeline and record it to FILE (MCAP) until
+    /// the run ends or Ctrl-C.
+    Record(logcmd::RecordArgs),
+    /// Feed a recording's sensor channels into a pipeline (its recorded manifest
+    /// unless `--manifest`), as the sensor process would.
+    Replay(logcmd::ReplayArgs),
+    /// Recordings: `nauta log info FILE [--json]`.
+    Log {
+        #[command(subcommand)]
+        which: LogCommand,
+    },
+    /// Accuracy of every estimate stream of a recording against the truth
+    /// (simulator) or against surface GPS fixes (real data).
+    Eval(eval::EvalArgs),
+    /// Convert a recording for Google Earth (kml), GIS (geojson, gpx),
+    /// spreadsheets (csv) or Foxglove (foxglove: MCAP with JSON messages).
+    Export(export::ExportArgs),
+    /// PNG plots of a recording and an index.html with the eval table.
+    Report(report::ReportArgs),
     /// Benchmarks (use a release build).
     Bench {
         #[command(subcommand)]
@@ -74,7 +97,20 @@ enum Command {
 }
 
 #[derive(Debug, Subcommand)]
+enum LogCommand {
+    /// Channels, types, counts, rates, time span, gaps, metadata, events, and
+    /// whether the file was cut short (and how much of it was read).
+    Info(logcmd::InfoArgs),
+}
+
+#[derive(Debug, Subcommand)]
 enum BenchCommand {
+    /// Recording speed: a 45-minute survey written to MCAP and read back.
+    Log {
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Inter-process latency and throughput: iceoryx2 against a Unix socket and a pipe.
     Ipc {
         /// Print one JSON object instead of a table.
@@ -149,7 +185,16 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             &variant,
         )
         .map(|()| ExitCode::SUCCESS),
+        Command::Record(args) => logcmd::record(&args),
+        Command::Replay(args) => logcmd::replay(&args),
+        Command::Log { which } => match which {
+            LogCommand::Info(args) => logcmd::info(&args),
+        },
+        Command::Eval(args) => eval::run(&args),
+        Command::Export(args) => export::run(&args),
+        Command::Report(args) => report::run(&args),
         Command::Bench { which } => match which {
+            BenchCommand::Log { json } => bench::log::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),

@@ -668,3 +668,85 @@ pub fn strip_ansi(s: &str) -> String {
     }
     out
 }
+
+// ---------------------------------------------------------------------------
+// Python: independent readers of nauta's files
+// ---------------------------------------------------------------------------
+
+/// The Python interpreter of a virtual environment holding
+/// `tests/py/requirements.txt` (the PyPI `mcap` reader, `geojson`,
+/// `jsonschema`), created once under the target directory; concurrent tests
+/// wait for the one that creates it (an exclusive `flock`).
+pub fn python() -> PathBuf {
+    static PY: OnceLock<PathBuf> = OnceLock::new();
+    PY.get_or_init(|| {
+        let target = bin_dir()
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| workspace_root().join("target"));
+        let venv = target.join("nauta-pyvenv");
+        let requirements = workspace_root().join("tests/py/requirements.txt");
+        let lock_path = target.join("nauta-pyvenv.lock");
+        let lock = std::fs::File::create(&lock_path)
+            .unwrap_or_else(|e| panic!("cannot create {}: {e}", lock_path.display()));
+        // SAFETY: flock on a file descriptor we own; released when `lock` drops.
+        let rc = unsafe { libc::flock(std::os::fd::AsRawFd::as_raw_fd(&lock), libc::LOCK_EX) };
+        assert_eq!(rc, 0, "cannot lock {}", lock_path.display());
+        let py = venv.join("bin").join("python");
+        let stamp = venv.join("requirements.installed");
+        let wanted = std::fs::read_to_string(&requirements)
+            .unwrap_or_else(|e| panic!("cannot read {}: {e}", requirements.display()));
+        if std::fs::read_to_string(&stamp).ok().as_deref() != Some(wanted.as_str()) {
+            let run = |cmd: &mut Command| {
+                let out = cmd
+                    .stdin(Stdio::null())
+                    .output()
+                    .unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
+                assert!(
+                    out.status.success(),
+                    "{cmd:?} failed ({}):\n{}{}",
+                    out.status,
+                    String::from_utf8_lossy(&out.stdout),
+                    String::from_utf8_lossy(&out.stderr)
+                );
+            };
+            run(Command::new("python3").arg("-m").arg("venv").arg(&venv));
+            run(Command::new(&py)
+                .args([
+                    "-m",
+                    "pip",
+                    "install",
+                    "-q",
+                    "--disable-pip-version-check",
+                    "-r",
+                ])
+                .arg(&requirements));
+            std::fs::write(&stamp, &wanted)
+                .unwrap_or_else(|e| panic!("cannot write {}: {e}", stamp.display()));
+        }
+        drop(lock);
+        py
+    })
+    .clone()
+}
+
+/// Runs `tests/py/<script>` with [`python`] and `args`; returns its stdout,
+/// panicking with its output when it fails.
+pub fn run_python(script: &str, args: &[&std::ffi::OsStr]) -> String {
+    let path = workspace_root().join("tests/py").join(script);
+    let out = Command::new(python())
+        .arg(&path)
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {}: {e}", path.display()));
+    assert!(
+        out.status.success(),
+        "{} failed ({}):\n{}{}",
+        path.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}

@@ -3,4 +3,5 @@
 pub mod attitude;
 pub mod chaos;
 pub mod ipc;
+pub mod log;
 pub mod sim;

@@ -22,7 +22,7 @@ pub mod registry;
 pub mod sensors;
 pub mod snapshots;
 
-pub use header::{Flags, Header, Role};
+pub use header::{Flags, GapCounter, Header, Role};
 pub use registry::{FieldInfo, Message, MessageVisitor, TypeInfo};
 
 pub use control::*;
