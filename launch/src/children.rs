@@ -147,7 +147,12 @@ pub fn spawn(l: &Launch<'_>) -> anyhow::Result<Running> {
             cmd.args(["--resume-after", &t.to_string()]);
         }
     }
-    cmd.args(l.args).stdin(Stdio::null()).process_group(0);
+    // The launcher's command line, for the logger's metadata.
+    let command_line: Vec<String> = std::env::args().collect();
+    cmd.args(l.args)
+        .env("NAUTA_COMMAND_LINE", command_line.join(" "))
+        .stdin(Stdio::null())
+        .process_group(0);
     // SAFETY: prctl is async-signal-safe and touches only the calling (child) process.
     unsafe {
         cmd.pre_exec(|| {

@@ -41,9 +41,14 @@ pub struct LaunchArgs {
     /// Run in this namespace instead of a unique one.
     #[arg(long)]
     pub namespace: Option<String>,
-    /// Override a manifest value: `run.KEY=VALUE` or `PROCESS.KEY=VALUE`.
+    /// Override a manifest value: `run.KEY=VALUE` or `PROCESS.KEY=VALUE`
+    /// (`process.NAME.KEY=VALUE` may add a process).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Record the whole run to FILE (MCAP): adds a logger process (restarted
+    /// on failure, into FILE.K.mcap) or points the manifest's logger there.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
 }
 
 /// How long a process may take to report ready.
@@ -98,6 +103,12 @@ struct Proc {
     describe: Describe,
 }
 
+impl Proc {
+    fn is_logger(&self) -> bool {
+        self.describe.role == Role::Logger.name()
+    }
+}
+
 /// A checked manifest and its processes in start order.
 pub struct Plan {
     /// The effective manifest (overrides applied).
@@ -105,9 +116,35 @@ pub struct Plan {
     procs: Vec<Proc>,
 }
 
+/// The binary of the logger role.
+pub const LOGGER_BIN: &str = "nauta-logger";
+
 /// Options shared by `nauta launch` and `nauta check` that change the manifest.
 fn overrides(args: &LaunchArgs) -> Vec<String> {
     let mut overrides = args.set.clone();
+    if let Some(file) = &args.record {
+        // The manifest's own logger, if it has one, else a new one.
+        let existing = std::fs::read_to_string(&args.manifest)
+            .ok()
+            .and_then(|t| toml::from_str::<toml::Table>(&t).ok())
+            .and_then(|t| {
+                t.get("process")?.as_table()?.iter().find_map(|(name, p)| {
+                    (p.get("bin")?.as_str()? == LOGGER_BIN).then(|| name.clone())
+                })
+            });
+        let file = toml::Value::String(file.display().to_string());
+        match existing {
+            Some(name) => overrides.push(format!("{name}.args=[\"-o\", {file}]")),
+            None => {
+                overrides.push(format!("process.logger.bin=\"{LOGGER_BIN}\""));
+                overrides.push(format!("process.logger.args=[\"-o\", {file}]"));
+                overrides.push(
+                    "process.logger.restart={ policy = \"on-failure\", max = 5, window_s = 60 }"
+                        .into(),
+                );
+            }
+        }
+    }
     if args.fast {
         overrides.push("run.clock=\"sim\"".into());
     }
@@ -180,9 +217,13 @@ pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<P
     check_wiring(&manifest, &procs)?;
     check_parameters(&manifest, &procs)?;
     // Sources first (in standby: see docs/design-notes.md), then consumers,
-    // each after the processes its `after` names.
-    let order = manifest
-        .start_order(|n| u8::from(!procs.iter().any(|p| p.name == n && p.describe.is_source())));
+    // each after the processes its `after` names, then the logger, which
+    // subscribes to the services that exist once everyone else is ready.
+    let order = manifest.start_order(|n| match procs.iter().find(|p| p.name == n) {
+        Some(p) if p.describe.is_source() => 0,
+        Some(p) if p.is_logger() => 2,
+        _ => 1,
+    });
     let procs = order
         .iter()
         .filter_map(|n| procs.iter().position(|p| &p.name == n))
@@ -630,8 +671,14 @@ fn activate(ctx: &Context, p: &Proc) -> anyhow::Result<()> {
 }
 
 fn stop_all(sup: &mut Supervisor) {
-    // Reverse start order: consumers before the sources they drain.
-    for r in sup.members.iter_mut().rev().map(|m| &mut m.child) {
+    // Reverse start order: consumers before the sources they drain; the
+    // logger last of all, so it records everything the others published.
+    let (loggers, others): (Vec<_>, Vec<_>) = sup
+        .members
+        .iter_mut()
+        .rev()
+        .partition(|m| m.role == Role::Logger);
+    for r in others.into_iter().chain(loggers).map(|m| &mut m.child) {
         if r.poll() {
             continue;
         }

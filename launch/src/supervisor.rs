@@ -372,11 +372,12 @@ impl Supervisor {
         if let Some(f) = self.members.iter().find_map(|m| m.failure.clone()) {
             return Ok(Outcome::Failed(f));
         }
+        // The logger runs until it is stopped, after everyone else.
         let done = self.retiring.is_empty()
-            && self
-                .members
-                .iter_mut()
-                .all(|m| m.pending.is_none() && m.swap.is_none() && m.child.poll());
+            && self.members.iter_mut().all(|m| {
+                m.role == Role::Logger
+                    || (m.pending.is_none() && m.swap.is_none() && m.child.poll())
+            });
         Ok(if done {
             Outcome::Finished
         } else {

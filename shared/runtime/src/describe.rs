@@ -54,7 +54,8 @@ pub struct Describe {
     /// A data source: it produces data on its own (its inputs, if any, are
     /// feedback such as LBL interrogations), so the launcher starts it in
     /// standby and activates it once every process is ready. A process
-    /// without inputs is always a source.
+    /// without inputs is always a source, except the logger, whose inputs are
+    /// whatever services the run has (it discovers them).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub source: bool,
 }
@@ -63,7 +64,7 @@ impl Describe {
     /// Whether the launcher must start this process in standby (see
     /// [`Describe::source`]).
     pub fn is_source(&self) -> bool {
-        self.source || self.inputs.is_empty()
+        self.source || (self.inputs.is_empty() && self.role != nauta_messages::Role::Logger.name())
     }
 }
 

@@ -495,7 +495,8 @@ fn sets_inline(line: &str, key: &str) -> bool {
     })
 }
 
-/// Applies `run.KEY=VALUE` or `PROCESS.KEY=VALUE` (KEY may be dotted) to the table.
+/// Applies `run.KEY=VALUE`, `site.KEY=VALUE`, `PROCESS.KEY=VALUE` or
+/// `process.NAME.KEY=VALUE` (which may add a process) to the table; KEY may be dotted.
 /// VALUE is read as TOML (`3`, `1.5`, `true`, `"x"`, `[1, 2]`), else as a string.
 pub fn apply_override(table: &mut toml::Table, spec: &str) -> anyhow::Result<()> {
     let (path, value) = spec
@@ -510,7 +511,8 @@ pub fn apply_override(table: &mut toml::Table, spec: &str) -> anyhow::Result<()>
     if parts.len() < 2 || parts.iter().any(|p| p.is_empty()) {
         bail!("expected run.KEY or PROCESS.KEY, got {path:?}");
     }
-    if parts[0] != "run" && parts[0] != "site" {
+    // `process.NAME.KEY` may add a process; `NAME.KEY` changes an existing one.
+    if parts[0] != "run" && parts[0] != "site" && parts[0] != "process" {
         if !table
             .get("process")
             .and_then(|p| p.as_table())
