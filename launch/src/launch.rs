@@ -359,6 +359,13 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
             if !section.after.is_empty() {
                 wait_ready(&ctx, &mut events, &mut sup, &mut ready, &section.after)?;
             }
+            if p.is_logger() {
+                // Every other process has opened its publishers once it is
+                // ready: the logger then finds and attaches to all of them
+                // before the sources are activated.
+                let before: Vec<String> = sup.members.iter().map(|m| m.name.clone()).collect();
+                wait_ready(&ctx, &mut events, &mut sup, &mut ready, &before)?;
+            }
             sup.start(
                 &p.name,
                 &p.bin,
@@ -371,6 +378,9 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
         let everyone: Vec<String> = sup.members.iter().map(|m| m.name.clone()).collect();
         wait_ready(&ctx, &mut events, &mut sup, &mut ready, &everyone)?;
         connect_taps(&ctx, &taps)?;
+        if procs.iter().any(Proc::is_logger) {
+            sup.announce_running(&mut ctx);
+        }
         for p in procs.iter().filter(|p| p.describe.is_source()) {
             activate(&ctx, p)?;
         }

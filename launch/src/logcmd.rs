@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use anyhow::Context as _;
+
 /// Arguments of `nauta log info`.
 #[derive(Debug, clap::Args)]
 pub struct InfoArgs {
@@ -35,6 +37,15 @@ pub struct ReplayArgs {
     /// As fast as the pipeline consumes (sim clock, deterministic).
     #[arg(long)]
     pub fast: bool,
+    /// Run this manifest's estimators instead of the recorded manifest's.
+    #[arg(long)]
+    pub manifest: Option<PathBuf>,
+    /// Record the replayed run to this file (MCAP).
+    #[arg(long, value_name = "OUT")]
+    pub record: Option<PathBuf>,
+    /// Override a manifest value, as `nauta launch --set`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
 }
 
 /// A progress bar on stderr for reading `total` bytes, shown only on a terminal.
@@ -136,12 +147,117 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// `nauta record -o FILE`.
-pub fn record(_args: &RecordArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("nauta record is not built yet")
+/// `nauta record -o FILE`: becomes a logger attached to the running
+/// pipeline (`nauta-logger`, which stops when the run's launcher exits or on
+/// Ctrl-C).
+pub fn record(args: &RecordArgs) -> anyhow::Result<ExitCode> {
+    use std::os::unix::process::CommandExt as _;
+    let run = crate::pipeline::find(args.namespace.as_deref())?;
+    let manifest = crate::launch::runs_dir()
+        .join(&run.namespace)
+        .join("manifest.toml");
+    let bin = crate::children::find_binary(crate::launch::LOGGER_BIN)?;
+    eprintln!(
+        "nauta: recording run {} ({}) to {}",
+        run.namespace,
+        run.manifest,
+        args.output.display()
+    );
+    let err = std::process::Command::new(&bin)
+        .arg("--manifest")
+        .arg(&manifest)
+        .args(["--process", "record", "--namespace", &run.namespace])
+        .arg("-o")
+        .arg(&args.output)
+        .args(["--follow-pid", &run.launcher_pid.to_string()])
+        .env(
+            "NAUTA_COMMAND_LINE",
+            std::env::args().collect::<Vec<_>>().join(" "),
+        )
+        .exec();
+    Err(anyhow::anyhow!("cannot run {}: {err}", bin.display()))
 }
 
-/// `nauta replay FILE`.
-pub fn replay(_args: &ReplayArgs) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("nauta replay is not built yet")
+/// The manifest a replay runs: the recorded one (or `--manifest`), with its
+/// sensor reading the recording (`--from`) and without its logger (which would
+/// write over the recording; `--record` adds one).
+fn replay_manifest(args: &ReplayArgs, file: &std::path::Path) -> anyhow::Result<toml::Table> {
+    let (text, origin) = match &args.manifest {
+        Some(m) => (
+            std::fs::read_to_string(m).with_context(|| format!("cannot read {}", m.display()))?,
+            m.display().to_string(),
+        ),
+        None => {
+            let rec = nauta_log::read(file, |_, _| Ok(()))?;
+            let text = rec
+                .metadata(nauta_log::META_RUN)
+                .and_then(|m| m.get("manifest"))
+                .cloned()
+                .with_context(|| {
+                    format!(
+                        "{} holds no manifest (metadata {}); give one with --manifest",
+                        file.display(),
+                        nauta_log::META_RUN
+                    )
+                })?;
+            (text, format!("the manifest recorded in {}", file.display()))
+        }
+    };
+    let mut table: toml::Table =
+        toml::from_str(&text).with_context(|| format!("cannot parse {origin}"))?;
+    let processes = table
+        .get_mut("process")
+        .and_then(toml::Value::as_table_mut)
+        .with_context(|| format!("{origin} has no [process.*]"))?;
+    let bin_of = |p: &toml::Value| {
+        p.get("bin")
+            .and_then(toml::Value::as_str)
+            .map(str::to_owned)
+    };
+    processes.retain(|_, p| bin_of(p).as_deref() != Some(crate::launch::LOGGER_BIN));
+    let mut sensors = 0;
+    for (_, p) in processes.iter_mut() {
+        if bin_of(p).as_deref() == Some("nauta-sensor")
+            && let Some(t) = p.as_table_mut()
+        {
+            t.insert(
+                "args".into(),
+                toml::Value::Array(vec!["--from".into(), file.display().to_string().into()]),
+            );
+            sensors += 1;
+        }
+    }
+    anyhow::ensure!(
+        sensors > 0,
+        "{origin} has no nauta-sensor process to replay through"
+    );
+    Ok(table)
+}
+
+/// `nauta replay FILE`: runs the recorded pipeline (or `--manifest`) with the
+/// sensor republishing the recording.
+pub fn replay(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
+    let file = std::path::absolute(&args.file)
+        .with_context(|| format!("cannot resolve {}", args.file.display()))?;
+    let table = replay_manifest(args, &file)?;
+    let dir = crate::launch::runs_dir();
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let manifest = dir.join(format!("replay-{}.toml", std::process::id()));
+    std::fs::write(&manifest, toml::to_string(&table)?)
+        .with_context(|| format!("cannot write {}", manifest.display()))?;
+    let launch = crate::launch::LaunchArgs {
+        manifest: manifest.clone(),
+        clock: args.rate.map(|_| "wall".to_owned()),
+        fast: args.fast,
+        rate: args.rate,
+        duration: None,
+        seed: None,
+        namespace: None,
+        set: args.set.clone(),
+        record: args.record.clone(),
+    };
+    eprintln!("nauta: replaying {}", file.display());
+    let result = crate::launch::run(&launch);
+    let _ = std::fs::remove_file(&manifest);
+    result.map(ExitCode::from)
 }

@@ -638,6 +638,19 @@ fn control(command: u32, boundary_stamp_ns: u64) -> ControlRequest {
     }
 }
 
+impl Supervisor {
+    /// Publishes a STARTED event for every process running now: a logger that
+    /// joined after them records who runs (their own READY events went out
+    /// before it listened).
+    pub fn announce_running(&mut self, ctx: &mut Context) {
+        for m in self.members.iter_mut() {
+            if !m.child.poll() {
+                publish(ctx, event_kind::STARTED, m, 0);
+            }
+        }
+    }
+}
+
 fn publish(ctx: &mut Context, kind: u32, m: &Member, exit_code: i32) {
     ctx.publish_event(RunEvent {
         header: Header::new(0, 0, Role::Launcher, 0),

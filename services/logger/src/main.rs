@@ -40,6 +40,10 @@ struct Args {
     /// file of the instance that died is kept as it was.
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     output: Option<PathBuf>,
+    /// Stop (and finish the file) once this process has exited: `nauta record`
+    /// follows the run's launcher, which outlives every process of the run.
+    #[arg(long, value_name = "PID")]
+    follow_pid: Option<u32>,
 }
 
 /// How often the logger looks for services that appeared.
@@ -229,14 +233,24 @@ fn run(args: &Args) -> anyhow::Result<()> {
         run_metadata(args, manifest.as_ref(), ns),
     )?;
     writer.flush()?;
-    let result = record(&mut ctx, &mut writer, &path);
+    let result = record(&mut ctx, &mut writer, &path, args.follow_pid);
     // Whatever happened, the file gets its summary.
     let finished = writer.finish();
     ctx.finish();
     result.and(finished)
 }
 
-fn record(ctx: &mut Context, writer: &mut LogWriter, path: &Path) -> anyhow::Result<()> {
+fn alive(pid: u32) -> bool {
+    // SAFETY: kill(2) with signal 0 only checks that the process exists.
+    pid > 0 && unsafe { libc::kill(pid as i32, 0) } == 0
+}
+
+fn record(
+    ctx: &mut Context,
+    writer: &mut LogWriter,
+    path: &Path,
+    follow_pid: Option<u32>,
+) -> anyhow::Result<()> {
     let mut health = HealthReporter::new(ctx)?;
     let mut known = BTreeSet::new();
     let mut taps: Vec<Box<dyn RecordingTap>> = Vec::new();
@@ -255,6 +269,7 @@ fn record(ctx: &mut Context, writer: &mut LogWriter, path: &Path) -> anyhow::Res
     let mut last_flush = Instant::now();
     let mut last_discovery = Instant::now();
     let mut last_health = Instant::now();
+    let mut stop = false;
     loop {
         let mut found = Vec::new();
         let exit = {
@@ -277,6 +292,13 @@ fn record(ctx: &mut Context, writer: &mut LogWriter, path: &Path) -> anyhow::Res
                         health.publish(ctx);
                         last_health = Instant::now();
                     }
+                    if let Some(pid) = follow_pid
+                        && !alive(pid)
+                    {
+                        tracing::info!(pid, "the run's launcher has exited");
+                        stop = true;
+                        return Ok(ControlFlow::Break(()));
+                    }
                     if last_discovery.elapsed() >= DISCOVERY_PERIOD {
                         last_discovery = Instant::now();
                         found = discovery::open_new(ctx, writer, &mut known)?;
@@ -290,6 +312,7 @@ fn record(ctx: &mut Context, writer: &mut LogWriter, path: &Path) -> anyhow::Res
         };
         match exit {
             LoopExit::Signal => break,
+            LoopExit::Finished if stop => break,
             LoopExit::Finished => {
                 for (t, i) in found {
                     tracing::info!(service = t.topic(), "recording a new service");

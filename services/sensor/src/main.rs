@@ -3,7 +3,8 @@
 //! publishes the truth and every simulated sensor at its own rate (DESIGN §4):
 //! in `sim` clock as fast as the pipeline consumes (back-pressured,
 //! deterministic), in `wall` clock paced to real time or a multiple of it. It
-//! answers LBL interrogations in closed loop ([`lbl_link`]).
+//! answers LBL interrogations in closed loop ([`lbl_link`]). With `--from
+//! FILE` it replays a recording instead ([`replay`]).
 
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -19,6 +20,7 @@ use nauta_sim::scenario::Generator;
 mod lbl_link;
 mod outputs;
 mod params;
+mod replay;
 
 use lbl_link::{LblLink, Waited};
 use outputs::Outputs;
@@ -30,10 +32,14 @@ use params::SensorParams;
 struct Args {
     #[command(flatten)]
     process: ProcessArgs,
+    /// Replay this recording (MCAP) instead of simulating: its sensor channels
+    /// and truth, with their stamps (`nauta replay FILE` sets this up).
+    #[arg(long, value_name = "FILE")]
+    from: Option<std::path::PathBuf>,
 }
 
 /// Steps published between two flushes (one wake-up of the consumers).
-const BATCH: u64 = 32;
+pub(crate) const BATCH: u64 = 32;
 
 /// How far the manifest's `[site] magnetic_declination_deg` may be from the
 /// World Magnetic Model's before the sensor warns, degrees.
@@ -51,18 +57,27 @@ fn describe() -> Describe {
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    let from = args.from.clone();
     service_main_checked(
         Role::Sensor,
         "sim",
         &args.process,
         describe,
-        |t| setup(&t.manifest, &t.process, &t.variant).map(|_| ()),
-        serve,
+        |t| match &from {
+            Some(f) => std::fs::metadata(f)
+                .map(|_| ())
+                .with_context(|| format!("cannot replay {}", f.display())),
+            None => setup(&t.manifest, &t.process, &t.variant).map(|_| ()),
+        },
+        |ctx| match &from {
+            Some(f) => replay::serve(ctx, f),
+            None => serve(ctx),
+        },
     )
 }
 
 /// Answers control requests: true if STOP was asked.
-fn serve_control(
+pub(crate) fn serve_control(
     control: &mut ControlServer,
     ctx: &Context,
     last_stamp: u64,
@@ -261,7 +276,7 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
 /// for the launcher's ACTIVATE, sent once every consumer has connected, so that
 /// nothing is published before anyone listens (DESIGN §5). False on STOP or a
 /// termination signal.
-fn hold_until_activated(
+pub(crate) fn hold_until_activated(
     ctx: &Context,
     control: &mut ControlServer,
     health: &mut HealthReporter,

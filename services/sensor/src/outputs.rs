@@ -1,6 +1,5 @@
-//! The sensor's publishers and the conversion of the simulator's readings to
-//! wire messages (DESIGN §4). The readings already carry wire units (µT, rad,
-//! m/s); their simulator annotations (event kinds, true ranges) stay behind.
+//! The sensor's publishers (DESIGN §4); the simulator's readings become wire
+//! messages in [`nauta_sim::wire`].
 
 use nauta_messages::*;
 use nauta_runtime::{Context, PortDescription, Publisher, services};
@@ -19,7 +18,7 @@ pub struct Outputs {
     lbl: Publisher<LblReply>,
     /// `sensor/progress`: watermarks and the end of stream.
     pub progress: Publisher<Progress>,
-    lbl_scratch: Vec<LblReply>,
+    scratch: Vec<SensorMessage>,
 }
 
 /// The data outputs, for `--describe`.
@@ -38,10 +37,6 @@ pub fn describe() -> Vec<PortDescription> {
     ]
 }
 
-fn header(stamp_ns: u64) -> Header {
-    Header::new(stamp_ns, 0, Role::Sensor, 0)
-}
-
 impl Outputs {
     /// Opens every publisher.
     pub fn open(ctx: &Context) -> anyhow::Result<Self> {
@@ -56,100 +51,34 @@ impl Outputs {
             modem: ctx.publisher(&services::modem())?,
             lbl: ctx.publisher(&services::lbl_reply())?,
             progress: ctx.publisher(&services::progress(Role::Sensor))?,
-            lbl_scratch: Vec::new(),
+            scratch: Vec::new(),
         })
     }
 
-    /// Publishes one step's measurements (the truth first). LBL replies of one
-    /// step go out in stamp order.
+    /// Publishes one step's measurements, in [`nauta_sim::wire`]'s order (the
+    /// truth first, LBL replies in stamp order).
     pub fn publish(&mut self, m: &Measurements) -> anyhow::Result<()> {
-        let t = &m.truth;
-        self.truth.publish(TruthState {
-            header: header(t.stamp_ns),
-            lat_rad: t.lat_rad,
-            lon_rad: t.lon_rad,
-            depth_m: t.depth_m,
-            vel_ned_m_s: t.vel_ned_m_s,
-            quat_nb: t.quat_nb,
-            rate_nb_body_rad_s: t.rate_nb_body_rad_s,
-            current_ned_m_s: t.current_ned_m_s,
-            distance_m: t.distance_m,
-        })?;
-        if let Some(r) = &m.imu {
-            self.imu.publish(ImuSample {
-                header: header(r.stamp_ns),
-                gyro_rad_s: r.gyro_rad_s,
-                accel_m_s2: r.accel_m_s2,
-                mag_ut: r.mag_ut,
-                interval_s: r.interval_s,
-            })?;
-        }
-        if let Some(r) = &m.ahrs {
-            self.ahrs.publish(AhrsSample {
-                header: header(r.stamp_ns),
-                roll_rad: r.roll_rad,
-                pitch_rad: r.pitch_rad,
-                heading_mag_rad: r.heading_mag_rad,
-            })?;
-        }
-        if let Some(r) = &m.dvl {
-            self.dvl.publish(DvlSample {
-                header: header(r.stamp_ns),
-                velocity_body_m_s: r.velocity_body_m_s,
-                altitude_m: r.altitude_m,
-                beams_valid: r.beams_valid,
-                bottom_lock: r.bottom_lock,
-                figure_of_merit_m_s: r.figure_of_merit_m_s,
-            })?;
-        }
-        if let Some(r) = &m.depth {
-            self.depth.publish(DepthSample {
-                header: header(r.stamp_ns),
-                depth_m: r.depth_m,
-            })?;
-        }
-        if let Some(r) = &m.gps {
-            self.gps.publish(GpsFix {
-                header: header(r.stamp_ns),
-                lat_rad: r.lat_rad,
-                lon_rad: r.lon_rad,
-                height_m: r.height_m,
-                horizontal_std_m: r.horizontal_std_m,
-                quality: r.quality,
-                satellites: r.satellites,
-            })?;
-        }
-        if let Some(r) = &m.propeller {
-            self.propeller.publish(PropellerSample {
-                header: header(r.stamp_ns),
-                shaft_speed_rad_s: r.shaft_speed_rad_s,
-            })?;
-        }
-        if let Some(r) = &m.modem {
-            self.modem.publish(BuoyRange {
-                header: header(r.stamp_ns),
-                buoy_lat_rad: r.buoy_lat_rad,
-                buoy_lon_rad: r.buoy_lon_rad,
-                buoy_depth_m: r.buoy_depth_m,
-                time_of_flight_s: r.time_of_flight_s,
-                sound_speed_m_s: r.sound_speed_m_s,
-            })?;
-        }
-        if !m.lbl.is_empty() {
-            self.lbl_scratch.clear();
-            self.lbl_scratch.extend(m.lbl.iter().map(|r| LblReply {
-                header: header(r.stamp_ns),
-                transponder_id: r.transponder_id,
-                pad: 0,
-                interrogation_stamp_ns: r.interrogation_stamp_ns,
-                reply_stamp_ns: r.reply_stamp_ns,
-                round_trip_s: r.round_trip_s,
-            }));
-            self.lbl_scratch
-                .sort_by_key(|r| (r.header.stamp_ns, r.transponder_id));
-            for r in &self.lbl_scratch {
-                self.lbl.publish(*r)?;
-            }
+        let mut scratch = std::mem::take(&mut self.scratch);
+        scratch.clear();
+        nauta_sim::wire::to_wire(m, &mut scratch);
+        let result = scratch.iter().try_for_each(|msg| self.publish_message(msg));
+        self.scratch = scratch;
+        result
+    }
+
+    /// Publishes one message as it is (its stamp and flags; the sequence,
+    /// source and instance are this publisher's).
+    pub fn publish_message(&mut self, msg: &SensorMessage) -> anyhow::Result<()> {
+        match *msg {
+            SensorMessage::Truth(m) => self.truth.publish(m)?,
+            SensorMessage::Imu(m) => self.imu.publish(m)?,
+            SensorMessage::Ahrs(m) => self.ahrs.publish(m)?,
+            SensorMessage::Dvl(m) => self.dvl.publish(m)?,
+            SensorMessage::Depth(m) => self.depth.publish(m)?,
+            SensorMessage::Gps(m) => self.gps.publish(m)?,
+            SensorMessage::Propeller(m) => self.propeller.publish(m)?,
+            SensorMessage::Modem(m) => self.modem.publish(m)?,
+            SensorMessage::Lbl(m) => self.lbl.publish(m)?,
         }
         Ok(())
     }

@@ -196,3 +196,132 @@ message! {
         pub distance_m: f64,
     }
 }
+
+/// Any message of the sensor process's data services (the simulator's or a
+/// replay's output), with its service and its place in the publishing order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SensorMessage {
+    /// `sim/truth`.
+    Truth(TruthState),
+    /// `sensor/imu`.
+    Imu(ImuSample),
+    /// `sensor/ahrs`.
+    Ahrs(AhrsSample),
+    /// `sensor/dvl`.
+    Dvl(DvlSample),
+    /// `sensor/depth`.
+    Depth(DepthSample),
+    /// `sensor/gps`.
+    Gps(GpsFix),
+    /// `sensor/propeller`.
+    Propeller(PropellerSample),
+    /// `sensor/modem`.
+    Modem(BuoyRange),
+    /// `sensor/lbl`.
+    Lbl(LblReply),
+}
+
+impl SensorMessage {
+    /// The services in publishing order within one stamp (the simulator's
+    /// order: the truth first).
+    pub const SERVICES: [&'static str; 9] = [
+        TRUTH_SERVICE,
+        IMU_SERVICE,
+        AHRS_SERVICE,
+        DVL_SERVICE,
+        DEPTH_SERVICE,
+        GPS_SERVICE,
+        PROPELLER_SERVICE,
+        MODEM_SERVICE,
+        LBL_REPLY_SERVICE,
+    ];
+
+    /// Index of its service in [`SensorMessage::SERVICES`].
+    pub fn order(&self) -> usize {
+        match self {
+            Self::Truth(_) => 0,
+            Self::Imu(_) => 1,
+            Self::Ahrs(_) => 2,
+            Self::Dvl(_) => 3,
+            Self::Depth(_) => 4,
+            Self::Gps(_) => 5,
+            Self::Propeller(_) => 6,
+            Self::Modem(_) => 7,
+            Self::Lbl(_) => 8,
+        }
+    }
+
+    /// Its service.
+    pub fn service(&self) -> &'static str {
+        Self::SERVICES[self.order()]
+    }
+
+    /// Its header.
+    pub fn header(&self) -> &Header {
+        use crate::Message;
+        match self {
+            Self::Truth(m) => m.header(),
+            Self::Imu(m) => m.header(),
+            Self::Ahrs(m) => m.header(),
+            Self::Dvl(m) => m.header(),
+            Self::Depth(m) => m.header(),
+            Self::Gps(m) => m.header(),
+            Self::Propeller(m) => m.header(),
+            Self::Modem(m) => m.header(),
+            Self::Lbl(m) => m.header(),
+        }
+    }
+
+    /// Decodes a recorded payload of `service`; `None` for a service that is
+    /// not a sensor service.
+    pub fn decode(
+        service: &str,
+        data: &[u8],
+    ) -> Option<Result<SensorMessage, crate::codec::DecodeError>> {
+        use crate::codec::decode;
+        Some(match service {
+            TRUTH_SERVICE => decode(data).map(Self::Truth),
+            IMU_SERVICE => decode(data).map(Self::Imu),
+            AHRS_SERVICE => decode(data).map(Self::Ahrs),
+            DVL_SERVICE => decode(data).map(Self::Dvl),
+            DEPTH_SERVICE => decode(data).map(Self::Depth),
+            GPS_SERVICE => decode(data).map(Self::Gps),
+            PROPELLER_SERVICE => decode(data).map(Self::Propeller),
+            MODEM_SERVICE => decode(data).map(Self::Modem),
+            LBL_REPLY_SERVICE => decode(data).map(Self::Lbl),
+            _ => return None,
+        })
+    }
+
+    /// Its bincode encoding (see [`crate::codec`]).
+    pub fn encode(&self) -> Result<Vec<u8>, crate::codec::EncodeError> {
+        use crate::codec::encode;
+        match self {
+            Self::Truth(m) => encode(m),
+            Self::Imu(m) => encode(m),
+            Self::Ahrs(m) => encode(m),
+            Self::Dvl(m) => encode(m),
+            Self::Depth(m) => encode(m),
+            Self::Gps(m) => encode(m),
+            Self::Propeller(m) => encode(m),
+            Self::Modem(m) => encode(m),
+            Self::Lbl(m) => encode(m),
+        }
+    }
+
+    /// The type of its service.
+    pub fn type_info(&self) -> crate::TypeInfo {
+        use crate::TypeInfo;
+        match self {
+            Self::Truth(_) => TypeInfo::of::<TruthState>(),
+            Self::Imu(_) => TypeInfo::of::<ImuSample>(),
+            Self::Ahrs(_) => TypeInfo::of::<AhrsSample>(),
+            Self::Dvl(_) => TypeInfo::of::<DvlSample>(),
+            Self::Depth(_) => TypeInfo::of::<DepthSample>(),
+            Self::Gps(_) => TypeInfo::of::<GpsFix>(),
+            Self::Propeller(_) => TypeInfo::of::<PropellerSample>(),
+            Self::Modem(_) => TypeInfo::of::<BuoyRange>(),
+            Self::Lbl(_) => TypeInfo::of::<LblReply>(),
+        }
+    }
+}

@@ -26,3 +26,4 @@ pub mod scenario;
 pub mod suite;
 pub mod trajectory;
 pub mod vehicle;
+pub mod wire;

@@ -1,0 +1,392 @@
+//! Issue 5: recordings. A whole `--fast` survey recorded by the logger holds
+//! exactly what the publishers say they published, without a sequence gap; an
+//! independent MCAP reader (PyPI `mcap`) sees the same channels and counts; a
+//! replay of the recording through the pipeline reproduces the recorded
+//! estimates bit for bit; a logger killed with -9 leaves a file whose every
+//! flushed chunk is read back, and the reader reports the cut.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::Duration;
+
+use nauta_tests::*;
+
+const BOUND: Duration = Duration::from_secs(300);
+
+/// A directory for this test process's files, removed at exit by nobody: it
+/// lives under the target directory and is recreated per process.
+fn scratch(name: &str) -> PathBuf {
+    let dir = bin_dir()
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(std::env::temp_dir)
+        .join("nauta-test-recordings")
+        .join(format!("{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn nauta(args: &[&std::ffi::OsStr]) -> (Option<i32>, String, String) {
+    let out = std::process::Command::new(bin("nauta"))
+        .args(args)
+        .current_dir(workspace_root())
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run nauta");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn log_info(file: &Path) -> serde_json::Value {
+    let (code, out, err) = nauta(&[
+        "log".as_ref(),
+        "info".as_ref(),
+        file.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(
+        code,
+        Some(0),
+        "nauta log info {} failed:\n{err}",
+        file.display()
+    );
+    serde_json::from_str(&out).unwrap_or_else(|e| panic!("log info JSON: {e}\n{out}"))
+}
+
+fn channel<'a>(info: &'a serde_json::Value, topic: &str) -> &'a serde_json::Value {
+    info["channels"]
+        .as_array()
+        .and_then(|c| c.iter().find(|c| c["topic"] == topic))
+        .unwrap_or_else(|| panic!("no channel {topic} in {info}"))
+}
+
+/// The per-service counts a process logged in its `done` line:
+/// `counts=[("sim/truth", 260335), ...]`.
+fn sensor_counts(stderr: &str) -> BTreeMap<String, u64> {
+    let line = strip_ansi(stderr)
+        .lines()
+        .find(|l| l.contains("sensor") && l.contains(" done ") && l.contains("counts="))
+        .unwrap_or_else(|| panic!("no sensor `done` line in\n{stderr}"))
+        .to_owned();
+    let list = line
+        .split_once("counts=[")
+        .and_then(|(_, rest)| rest.split_once(']'))
+        .map(|(list, _)| list)
+        .expect("counts list");
+    list.split("), (")
+        .map(|item| {
+            let item = item.trim_matches(|c| c == '(' || c == ')');
+            let (name, n) = item.split_once(", ").expect("name, count");
+            (name.trim_matches('"').to_owned(), n.parse().expect("count"))
+        })
+        .collect()
+}
+
+/// `outputs=N` of a process's `done` line.
+fn done_field(stderr: &str, process: &str, field: &str) -> u64 {
+    let clean = strip_ansi(stderr);
+    let line = clean
+        .lines()
+        .find(|l| l.contains(&format!("{process}:")) && l.contains(" done "))
+        .unwrap_or_else(|| panic!("no {process} `done` line in\n{stderr}"));
+    line.split_whitespace()
+        .find_map(|w| w.strip_prefix(&format!("{field}=")))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no {field}= in {line}"))
+}
+
+/// One recorded run of the whole survey, `--fast`, shared by the tests below:
+/// (file, the launcher's output).
+fn survey_recording() -> &'static (PathBuf, Finished) {
+    static REC: OnceLock<(PathBuf, Finished)> = OnceLock::new();
+    REC.get_or_init(|| {
+        let wd = Watchdog::new("survey_recording", BOUND);
+        let file = scratch("survey").join("survey.mcap");
+        let f = launch(
+            &wd,
+            &["--fast", "--record", file.to_str().expect("utf-8 path")],
+        );
+        assert_eq!(f.code(), Some(0), "{f}");
+        (file, f)
+    })
+}
+
+/// Done when: a 45-minute `--fast` survey recording has zero sequence gaps on
+/// every channel and exactly as many messages per channel as were published.
+#[test]
+fn a_fast_survey_recording_holds_every_published_message_without_gaps() {
+    let (file, run) = survey_recording();
+    let info = log_info(file);
+    assert_eq!(info["truncated"], false, "{info}");
+    let mission_s = info["duration_s"].as_f64().expect("duration");
+    assert!(mission_s > 2500.0, "the survey is ~2603 s, got {mission_s}");
+    for c in info["channels"].as_array().expect("channels") {
+        assert_eq!(c["gaps"], 0, "gaps on {}", c["topic"]);
+        assert_eq!(c["out_of_order"], 0, "out of order on {}", c["topic"]);
+    }
+    // The sensor's own per-service counts.
+    let published = sensor_counts(&run.stderr);
+    assert!(published.len() >= 9, "{published:?}");
+    for (topic, n) in &published {
+        if *n == 0 {
+            continue; // a service without traffic (sensor/lbl in the survey)
+        }
+        assert_eq!(
+            channel(&info, topic)["count"].as_u64(),
+            Some(*n),
+            "{topic}: recorded vs published"
+        );
+    }
+    // The attitude's own count of its estimates.
+    let estimates = done_field(&run.stderr, "attitude", "outputs");
+    assert!(estimates > 250_000, "{estimates}");
+    assert_eq!(
+        channel(&info, "attitude/estimate")["count"].as_u64(),
+        Some(estimates)
+    );
+    // The metadata says how the run was made.
+    let run_meta = &info["metadata"]["nauta.run"];
+    for key in [
+        "manifest",
+        "seed",
+        "git_revision",
+        "command_line",
+        "sensor_config.sensor",
+    ] {
+        assert!(
+            run_meta.get(key).is_some(),
+            "nauta.run lacks {key}: {run_meta}"
+        );
+    }
+    assert_eq!(run_meta["seed"], "7");
+    // Lifecycle events are recorded.
+    let events = info["events"].as_array().expect("events");
+    for (kind, process) in [
+        ("started", "attitude"),
+        ("started", "sensor"),
+        ("exited", "attitude"),
+    ] {
+        assert!(
+            events
+                .iter()
+                .any(|e| e["kind"] == kind && e["process"] == process),
+            "no {kind} event of {process}: {events:?}"
+        );
+    }
+}
+
+/// Done when: an independent reader (the PyPI package `mcap`) opens the file
+/// and lists the same channels and counts.
+#[test]
+fn an_independent_mcap_reader_sees_the_same_channels_and_counts() {
+    let (file, _) = survey_recording();
+    let info = log_info(file);
+    let py: serde_json::Value =
+        serde_json::from_str(&run_python("mcap_counts.py", &[file.as_os_str()]))
+            .expect("python JSON");
+    assert_eq!(py["profile"], "nauta");
+    let ours: BTreeMap<String, u64> = info["channels"]
+        .as_array()
+        .expect("channels")
+        .iter()
+        .map(|c| {
+            (
+                c["topic"].as_str().expect("topic").to_owned(),
+                c["count"].as_u64().expect("count"),
+            )
+        })
+        .collect();
+    let theirs: BTreeMap<String, u64> = py["channels"]
+        .as_object()
+        .expect("channels")
+        .iter()
+        .map(|(t, c)| (t.clone(), c["count"].as_u64().expect("count")))
+        .collect();
+    assert_eq!(ours, theirs);
+    let imu = &py["channels"]["sensor/imu"];
+    assert_eq!(imu["schema"], "nauta.ImuSample.v1");
+    assert_eq!(imu["schema_encoding"], nauta_log::SCHEMA_ENCODING);
+    assert_eq!(imu["message_encoding"], nauta_log::MESSAGE_ENCODING);
+}
+
+/// The payloads of `topic` in `file`, in file order.
+fn payloads(file: &Path, topic: &str) -> Vec<Vec<u8>> {
+    let mut out = Vec::new();
+    nauta_log::read(file, |ch, m| {
+        if ch.topic == topic {
+            out.push(m.data.to_vec());
+        }
+        Ok(())
+    })
+    .unwrap_or_else(|e| panic!("read {}: {e:#}", file.display()));
+    out
+}
+
+/// Done when: replaying a recording into the pipeline in `sim` mode
+/// reproduces the recorded estimator outputs bit for bit.
+#[test]
+fn a_replay_reproduces_the_recorded_estimates_bit_for_bit() {
+    let (file, _) = survey_recording();
+    let wd = Watchdog::new("replay", BOUND);
+    let out = scratch("replay").join("replayed.mcap");
+    let _gate = Gate::share();
+    let r = Running::spawn(
+        &wd,
+        &bin("nauta"),
+        &[
+            "replay".as_ref(),
+            file.as_os_str(),
+            "--fast".as_ref(),
+            "--record".as_ref(),
+            out.as_os_str(),
+        ],
+        None,
+    )
+    .wait(&wd);
+    assert_eq!(r.code(), Some(0), "{r}");
+    for topic in ["sensor/imu", "sim/truth", "sensor/dvl", "sensor/gps"] {
+        let (a, b) = (payloads(file, topic), payloads(&out, topic));
+        assert_eq!(a.len(), b.len(), "{topic}: count");
+        assert!(a == b, "{topic}: the replay published other bytes");
+    }
+    let (a, b) = (
+        payloads(file, "attitude/estimate"),
+        payloads(&out, "attitude/estimate"),
+    );
+    assert!(a.len() > 250_000, "{}", a.len());
+    assert_eq!(a.len(), b.len(), "estimate count");
+    let first_diff = a.iter().zip(&b).position(|(x, y)| x != y);
+    assert_eq!(first_diff, None, "the replayed estimates differ");
+}
+
+/// Every message of `file` as (topic, payload), in file order, and whether
+/// the reader found the file cut short.
+fn all_messages(file: &Path) -> (Vec<(String, Vec<u8>)>, bool) {
+    let mut out = Vec::new();
+    let rec = nauta_log::read(file, |ch, m| {
+        out.push((ch.topic.clone(), m.data.to_vec()));
+        Ok(())
+    })
+    .unwrap_or_else(|e| panic!("read {}: {e:#}", file.display()));
+    (out, rec.recovery.truncated)
+}
+
+fn logger_status(ns: &str) -> Option<serde_json::Value> {
+    let (code, out, _) = nauta(&[
+        "status".as_ref(),
+        "--json".as_ref(),
+        "--namespace".as_ref(),
+        ns.as_ref(),
+    ]);
+    if code != Some(0) {
+        return None;
+    }
+    let s: serde_json::Value = serde_json::from_str(&out).ok()?;
+    s["processes"]
+        .as_array()?
+        .iter()
+        .find(|p| p["name"] == "logger")
+        .cloned()
+}
+
+/// Done when: the logger killed with `kill -9` mid-run: the file opens,
+/// every chunk flushed before the kill is read back, and the reader reports
+/// the truncation instead of failing. The launcher restarts the logger into
+/// `NAME.1.mcap`, which ends complete.
+#[test]
+fn a_logger_killed_with_9_leaves_every_flushed_chunk_readable() {
+    let wd = Watchdog::new("logger_kill_9", BOUND);
+    let dir = scratch("kill9");
+    let file = dir.join("run.mcap");
+    let ns = nauta_runtime::Namespace::unique();
+    let mut run = start_launch(
+        &wd,
+        &[
+            "--clock",
+            "wall",
+            "--rate",
+            "10",
+            "--duration",
+            "600",
+            "--namespace",
+            ns.as_str(),
+            "--record",
+            file.to_str().expect("utf-8 path"),
+        ],
+    );
+    // Running, and at least three flushes (one per second) on disk.
+    let mut pid = 0;
+    assert!(
+        wait_until(&wd, Duration::from_secs(60), || {
+            if let Some(l) = logger_status(ns.as_str())
+                && l["state"] == "running"
+            {
+                pid = l["pid"].as_u64().unwrap_or(0) as u32;
+            }
+            pid > 0
+        }),
+        "the logger never ran\n{}",
+        run.wait(&wd)
+    );
+    std::thread::sleep(Duration::from_millis(3500));
+    // What is on disk now was flushed before the kill.
+    let before = dir.join("before-kill.mcap");
+    std::fs::copy(&file, &before).expect("copy");
+    // SAFETY: kill(2) on the logger's pid, read from the run's status.
+    assert_eq!(unsafe { libc::kill(pid as i32, libc::SIGKILL) }, 0);
+    assert!(
+        wait_until(&wd, Duration::from_secs(30), || {
+            logger_status(ns.as_str())
+                .is_some_and(|l| l["restarts"] == 1 && l["state"] == "running")
+        }),
+        "the logger was not restarted\n{}",
+        run.wait(&wd)
+    );
+    std::thread::sleep(Duration::from_millis(1500));
+    let (code, _, err) = nauta(&[
+        "stop".as_ref(),
+        "--namespace".as_ref(),
+        ns.as_str().as_ref(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let f = run.wait(&wd);
+    assert!(
+        !f.stdout.is_empty() && f.code().is_some(),
+        "the launcher did not end normally\n{f}"
+    );
+
+    // The killed instance's file: cut short, readable, reported.
+    let (flushed, cut_before) = all_messages(&before);
+    let (kept, cut) = all_messages(&file);
+    assert!(cut_before && cut, "the reader did not report the cut");
+    assert!(
+        flushed.len() > 1000,
+        "only {} messages flushed in 3.5 s",
+        flushed.len()
+    );
+    assert!(kept.len() >= flushed.len());
+    assert!(
+        kept[..flushed.len()] == flushed[..],
+        "a message flushed before the kill was not read back"
+    );
+    let info = log_info(&file);
+    assert_eq!(info["truncated"], true, "{info}");
+    assert!(info["recovery"]["read_bytes"].as_u64() <= info["recovery"]["file_bytes"].as_u64());
+    assert!(
+        info["messages"].as_u64() == Some(kept.len() as u64),
+        "{info}"
+    );
+    // The restarted logger's file is complete.
+    let second = dir.join("run.1.mcap");
+    let (more, cut_second) = all_messages(&second);
+    assert!(!cut_second, "the restarted logger's file is not complete");
+    assert!(!more.is_empty());
+    let info2 = log_info(&second);
+    assert_eq!(info2["truncated"], false);
+    assert_eq!(info2["metadata"]["nauta.run"]["instance"], "1");
+}
