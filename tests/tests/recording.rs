@@ -390,3 +390,90 @@ fn a_logger_killed_with_9_leaves_every_flushed_chunk_readable() {
     assert_eq!(info2["truncated"], false);
     assert_eq!(info2["metadata"]["nauta.run"]["instance"], "1");
 }
+
+/// `nauta record -o FILE` attaches a logger to a running pipeline; it ends
+/// with the run and leaves a complete file whose gap counts agree with the
+/// logger's own.
+#[test]
+fn nauta_record_attaches_to_a_running_pipeline() {
+    let wd = Watchdog::new("record_attach", BOUND);
+    let dir = scratch("attach");
+    let file = dir.join("attached.mcap");
+    let ns = nauta_runtime::Namespace::unique();
+    let run = start_launch(
+        &wd,
+        &[
+            "--clock",
+            "wall",
+            "--rate",
+            "10",
+            "--duration",
+            "600",
+            "--namespace",
+            ns.as_str(),
+        ],
+    );
+    assert!(
+        wait_until(&wd, Duration::from_secs(60), || {
+            let (code, out, _) = nauta(&[
+                "status".as_ref(),
+                "--json".as_ref(),
+                "--namespace".as_ref(),
+                ns.as_str().as_ref(),
+            ]);
+            code == Some(0)
+                && serde_json::from_str::<serde_json::Value>(&out).is_ok_and(|s| {
+                    s["processes"]
+                        .as_array()
+                        .is_some_and(|p| p.iter().all(|p| p["state"] == "running"))
+                })
+        }),
+        "the pipeline never ran\n{}",
+        run.wait(&wd)
+    );
+    let record = Running::spawn(
+        &wd,
+        &bin("nauta"),
+        &[
+            "record".as_ref(),
+            "-o".as_ref(),
+            file.as_os_str(),
+            "--namespace".as_ref(),
+            ns.as_str().as_ref(),
+        ],
+        None,
+    );
+    std::thread::sleep(Duration::from_secs(3));
+    let (code, _, err) = nauta(&[
+        "stop".as_ref(),
+        "--namespace".as_ref(),
+        ns.as_str().as_ref(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let launched = run.wait(&wd);
+    assert_eq!(launched.code(), Some(0), "{launched}");
+    let recorded = record.wait(&wd);
+    assert_eq!(recorded.code(), Some(0), "{recorded}");
+    let info = log_info(&file);
+    assert_eq!(info["truncated"], false, "{info}");
+    for topic in ["sensor/imu", "sim/truth", "attitude/estimate"] {
+        let c = channel(&info, topic);
+        assert!(c["count"].as_u64() > Some(100), "{topic}: {c}");
+    }
+    // The gaps the file shows are the gaps the logger counted as it received.
+    let stats = &info["metadata"]["nauta.logger.stats"];
+    for c in info["channels"].as_array().expect("channels") {
+        let topic = c["topic"].as_str().expect("topic");
+        let own = stats[topic].as_str().unwrap_or_default();
+        assert!(
+            own.contains(&format!("received={} gaps={} ", c["count"], c["gaps"])),
+            "{topic}: file {c} against the logger's {own:?}"
+        );
+    }
+    assert!(
+        info["metadata"]["nauta.run"]["command_line"]
+            .as_str()
+            .is_some_and(|c| c.contains("record")),
+        "{info}"
+    );
+}
