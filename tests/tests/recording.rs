@@ -304,7 +304,7 @@ fn a_logger_killed_with_9_leaves_every_flushed_chunk_readable() {
     let dir = scratch("kill9");
     let file = dir.join("run.mcap");
     let ns = nauta_runtime::Namespace::unique();
-    let mut run = start_launch(
+    let run = start_launch(
         &wd,
         &[
             "--clock",
