@@ -8,6 +8,7 @@ mod bench;
 mod children;
 mod eval;
 mod export;
+mod import;
 mod launch;
 mod logcmd;
 mod monitor;
@@ -82,6 +83,12 @@ enum Command {
     Export(export::ExportArgs),
     /// PNG plots of a recording and an index.html with the eval table.
     Report(report::ReportArgs),
+    /// Turn an outside data set into a recording to replay:
+    /// `nauta import broad TRIAL.csv.gz -o OUT.mcap`.
+    Import {
+        #[command(subcommand)]
+        which: ImportCommand,
+    },
     /// Benchmarks (use a release build).
     Bench {
         #[command(subcommand)]
@@ -94,6 +101,13 @@ enum Command {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<String>,
     },
+}
+
+#[derive(Debug, Subcommand)]
+enum ImportCommand {
+    /// A BROAD trial (IMU and optical reference) as `sensor/imu` and `sim/truth`,
+    /// with a manifest that replays it through the attitude process.
+    Broad(import::ImportBroadArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -193,6 +207,9 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Eval(args) => eval::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Report(args) => report::run(&args),
+        Command::Import { which } => match which {
+            ImportCommand::Broad(args) => import::broad(&args),
+        },
         Command::Bench { which } => match which {
             BenchCommand::Log { json } => bench::log::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),

@@ -477,3 +477,72 @@ fn nauta_record_attaches_to_a_running_pipeline() {
         "{info}"
     );
 }
+
+/// Issue 6: `nauta import broad` turns a BROAD trial (Laidig et al. 2021,
+/// CC BY 4.0; ../shared/data/broad) into a recording that replays through the
+/// running pipeline, where the attitude process's `pf` follows the optical
+/// reference within the issue's per-trial bound (4.5°).
+#[test]
+fn an_imported_broad_trial_replays_through_the_attitude_process() {
+    let trial = workspace_root().join("../shared/data/broad/01_undisturbed_slow_rotation_A.csv.gz");
+    assert!(trial.is_file(), "{} missing", trial.display());
+    let dir = scratch("broad");
+    let imported = dir.join("broad01.mcap");
+    let (code, _, err) = nauta(&[
+        "import".as_ref(),
+        "broad".as_ref(),
+        trial.as_os_str(),
+        "-o".as_ref(),
+        imported.as_os_str(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let info = log_info(&imported);
+    let imu = channel(&info, "sensor/imu")["count"]
+        .as_u64()
+        .expect("count");
+    assert!(imu > 50_000, "{imu}");
+    assert!(channel(&info, "sim/truth")["count"].as_u64() > Some(50_000));
+    assert!(
+        (channel(&info, "sensor/imu")["rate_hz"]
+            .as_f64()
+            .expect("rate")
+            - 285.714)
+            .abs()
+            < 0.1
+    );
+
+    let wd = Watchdog::new("broad_replay", BOUND);
+    let run_file = dir.join("run.mcap");
+    let _gate = Gate::share();
+    let f = Running::spawn(
+        &wd,
+        &bin("nauta"),
+        &[
+            "replay".as_ref(),
+            imported.as_os_str(),
+            "--fast".as_ref(),
+            "--record".as_ref(),
+            run_file.as_os_str(),
+        ],
+        None,
+    )
+    .wait(&wd);
+    assert_eq!(f.code(), Some(0), "{f}");
+    let run = log_info(&run_file);
+    assert_eq!(channel(&run, "sensor/imu")["count"].as_u64(), Some(imu));
+    let estimates = channel(&run, "attitude/estimate")["count"]
+        .as_u64()
+        .expect("count");
+    assert!(
+        estimates + 400 >= imu,
+        "{estimates} estimates of {imu} samples"
+    );
+    let line = strip_ansi(&f.stdout);
+    let total: f64 = line
+        .split_once("total ")
+        .and_then(|(_, rest)| rest.split_once('°'))
+        .and_then(|(v, _)| v.parse().ok())
+        .unwrap_or_else(|| panic!("no attitude error in\n{line}"));
+    println!("BROAD trial 01 through the pipeline (pf): total RMS {total:.3}°");
+    assert!(total < 4.5, "{line}");
+}
