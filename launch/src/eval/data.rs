@@ -1,0 +1,413 @@
+//! A recording read into what `nauta eval` and `nauta report` use: the truth,
+//! the GPS fixes, every estimate stream, the LBL replies and the buoy
+//! positions, each checked (DESIGN §4: a value that fails its check is
+//! counted, never trusted) and sorted by stamp.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::Context as _;
+use nalgebra::{Matrix2, UnitQuaternion, Vector3};
+use nauta_messages::checked::{
+    self, BuoyRangeReading, Gps, LblReplyReading, Truth, limits, quaternion, scalar, vector,
+};
+use nauta_messages::{
+    AttitudeEstimate, BuoyRange, GpsFix, LblReply, LblSolution, Message, NavSolution, PositionFix,
+    TruthState, codec,
+};
+
+use super::run_info::{self, RunInfo};
+
+const PI: f64 = std::f64::consts::PI;
+
+/// The kind of an estimate stream: which message type it carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StreamKind {
+    /// `NavSolution` (`ains/nav`, or a smoothed track of that type).
+    Nav,
+    /// `AttitudeEstimate` (`attitude/estimate`).
+    Attitude,
+    /// `PositionFix` (`positioning/fix`).
+    Fix,
+    /// `LblSolution` (`lbl/nav`, or a smoothed LBL track).
+    Lbl,
+}
+
+impl StreamKind {
+    /// The kind of channels of `type_name`, if it is an estimate.
+    pub fn of(type_name: &str) -> Option<Self> {
+        match type_name {
+            NavSolution::TYPE_NAME => Some(Self::Nav),
+            AttitudeEstimate::TYPE_NAME => Some(Self::Attitude),
+            PositionFix::TYPE_NAME => Some(Self::Fix),
+            LblSolution::TYPE_NAME => Some(Self::Lbl),
+            _ => None,
+        }
+    }
+
+    /// Whether the stream has a horizontal position.
+    pub fn has_position(self) -> bool {
+        self != Self::Attitude
+    }
+}
+
+/// A horizontal position as the stream publishes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Horizontal {
+    /// Geodetic latitude and longitude, rad.
+    Geodetic {
+        /// Latitude, rad.
+        lat_rad: f64,
+        /// Longitude, rad.
+        lon_rad: f64,
+    },
+    /// North/east of the run's local origin, m (`lbl/nav`).
+    Local {
+        /// North, m.
+        north_m: f64,
+        /// East, m.
+        east_m: f64,
+    },
+}
+
+/// The last range an LBL filter processed, as it reports it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Innovation {
+    /// Measured minus predicted range, m (paper 003, `r - r*`).
+    pub residual_m: f64,
+    /// Transponder.
+    pub transponder_id: u32,
+    /// Passed the Mahalanobis gate.
+    pub accepted: bool,
+}
+
+/// One checked estimate; what its type does not carry is `None`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EstimateSample {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Horizontal position.
+    pub pos: Option<Horizontal>,
+    /// Depth, m.
+    pub depth_m: Option<f64>,
+    /// Velocity NED, m/s.
+    pub vel_ned_m_s: Option<Vector3<f64>>,
+    /// Attitude body → NED (a `NavSolution` with an all-zero quaternion has none).
+    pub attitude: Option<UnitQuaternion<f64>>,
+    /// Horizontal position covariance, north/east, m², when published.
+    pub cov_ne_m2: Option<Matrix2<f64>>,
+    /// Attitude error standard deviation about N, E, D, rad, when published.
+    pub att_std_rad: Option<Vector3<f64>>,
+    /// LBL: the last range innovation.
+    pub innovation: Option<Innovation>,
+}
+
+/// An estimate stream.
+#[derive(Debug, Clone)]
+pub struct Stream {
+    /// Channel topic (`ains/nav`).
+    pub topic: String,
+    /// Message type.
+    pub kind: StreamKind,
+    /// Checked samples, by stamp.
+    pub samples: Vec<EstimateSample>,
+    /// Messages that did not decode or failed their checks.
+    pub rejected: u64,
+}
+
+/// A checked true state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TruthSample {
+    /// Stamp, ns.
+    pub stamp_ns: u64,
+    /// Latitude, rad.
+    pub lat_rad: f64,
+    /// Longitude, rad.
+    pub lon_rad: f64,
+    /// Depth, m.
+    pub depth_m: f64,
+    /// Velocity NED, m/s.
+    pub vel_ned_m_s: Vector3<f64>,
+    /// Attitude body → NED.
+    pub attitude: UnitQuaternion<f64>,
+    /// Distance travelled over ground since the start, m.
+    pub distance_m: f64,
+}
+
+/// An LBL reply (`sensor/lbl`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LblRange {
+    /// Reply stamp, ns.
+    pub stamp_ns: u64,
+    /// Interrogation stamp, ns.
+    pub interrogation_ns: u64,
+    /// Transponder.
+    pub transponder_id: u32,
+    /// Round-trip time, s.
+    pub round_trip_s: f64,
+}
+
+/// A buoy position broadcast over the modem (`sensor/modem`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BuoyFix {
+    /// Reception stamp, ns.
+    pub stamp_ns: u64,
+    /// Latitude, rad.
+    pub lat_rad: f64,
+    /// Longitude, rad.
+    pub lon_rad: f64,
+}
+
+/// Everything eval and report take from a recording.
+#[derive(Debug, Clone, Default)]
+pub struct Data {
+    /// `sim/truth`, by stamp, one sample per stamp.
+    pub truth: Vec<TruthSample>,
+    /// `sensor/gps` fixes with a fix (quality > 0), by stamp.
+    pub gps: Vec<Gps>,
+    /// Estimate streams by topic.
+    pub streams: BTreeMap<String, Stream>,
+    /// `sensor/lbl` replies, by stamp.
+    pub lbl_replies: Vec<LblRange>,
+    /// `sensor/modem` buoy positions, by stamp.
+    pub buoy: Vec<BuoyFix>,
+    /// Reference messages (truth, GPS, LBL replies, buoy) that did not decode
+    /// or failed their checks, by topic.
+    pub rejected: BTreeMap<String, u64>,
+    /// The `nauta.run` metadata, read.
+    pub run: RunInfo,
+    /// Earliest stamp in the file, ns (the time axis of the report).
+    pub first_stamp_ns: u64,
+    /// The file was cut short (logger killed): what it holds is read.
+    pub truncated: bool,
+}
+
+impl Data {
+    /// Reads `path`; `on_progress(bytes read, file bytes)`.
+    pub fn read(path: &Path, on_progress: impl FnMut(u64, u64)) -> anyhow::Result<Self> {
+        let mut d = Data {
+            first_stamp_ns: u64::MAX,
+            ..Default::default()
+        };
+        let rec = nauta_log::reader::read_with_progress(path, on_progress, |ch, m| {
+            d.first_stamp_ns = d.first_stamp_ns.min(m.publish_time_ns);
+            d.take(&ch.topic, &ch.type_name, m.data);
+            Ok(())
+        })
+        .with_context(|| format!("cannot read the recording {}", path.display()))?;
+        if d.first_stamp_ns == u64::MAX {
+            d.first_stamp_ns = 0;
+        }
+        d.truncated = rec.recovery.truncated;
+        d.run = run_info::from_metadata(rec.metadata(nauta_log::META_RUN));
+        d.truth.sort_by_key(|t| t.stamp_ns);
+        d.truth.dedup_by_key(|t| t.stamp_ns);
+        d.gps.sort_by_key(|g| g.stamp_ns);
+        d.lbl_replies.sort_by_key(|r| r.stamp_ns);
+        d.buoy.sort_by_key(|b| b.stamp_ns);
+        for s in d.streams.values_mut() {
+            s.samples.sort_by_key(|e| e.stamp_ns);
+        }
+        Ok(d)
+    }
+
+    /// Takes one message; what fails to decode or check is counted.
+    pub fn take(&mut self, topic: &str, type_name: &str, data: &[u8]) {
+        if let Some(kind) = StreamKind::of(type_name) {
+            let stream = self
+                .streams
+                .entry(topic.to_owned())
+                .or_insert_with(|| Stream {
+                    topic: topic.to_owned(),
+                    kind,
+                    samples: Vec::new(),
+                    rejected: 0,
+                });
+            match estimate(kind, data) {
+                Some(s) => stream.samples.push(s),
+                None => stream.rejected += 1,
+            }
+            return;
+        }
+        let ok = match (topic, type_name) {
+            (nauta_messages::TRUTH_SERVICE, TruthState::TYPE_NAME) => {
+                truth(data).map(|t| self.truth.push(t)).is_some()
+            }
+            (nauta_messages::GPS_SERVICE, GpsFix::TYPE_NAME) => match decode::<GpsFix, Gps>(data) {
+                Some(g) => {
+                    if g.quality > 0 {
+                        self.gps.push(g);
+                    }
+                    true
+                }
+                None => false,
+            },
+            (_, LblReply::TYPE_NAME) => decode::<LblReply, LblReplyReading>(data)
+                .map(|r| {
+                    self.lbl_replies.push(LblRange {
+                        stamp_ns: r.stamp_ns,
+                        interrogation_ns: r.interrogation_stamp_ns,
+                        transponder_id: r.transponder_id,
+                        round_trip_s: r.round_trip_s,
+                    })
+                })
+                .is_some(),
+            (_, BuoyRange::TYPE_NAME) => decode::<BuoyRange, BuoyRangeReading>(data)
+                .map(|b| {
+                    self.buoy.push(BuoyFix {
+                        stamp_ns: b.stamp_ns,
+                        lat_rad: b.buoy_lat_rad,
+                        lon_rad: b.buoy_lon_rad,
+                    })
+                })
+                .is_some(),
+            _ => true,
+        };
+        if !ok {
+            *self.rejected.entry(topic.to_owned()).or_default() += 1;
+        }
+    }
+
+    /// Seconds since the first stamp of the file.
+    pub fn t_s(&self, stamp_ns: u64) -> f64 {
+        (stamp_ns as f64 - self.first_stamp_ns as f64) * 1e-9
+    }
+}
+
+fn decode<M, C>(data: &[u8]) -> Option<C>
+where
+    M: Message,
+    C: for<'a> TryFrom<&'a M>,
+{
+    let m: M = codec::decode(data).ok()?;
+    C::try_from(&m).ok()
+}
+
+fn truth(data: &[u8]) -> Option<TruthSample> {
+    let m: TruthState = codec::decode(data).ok()?;
+    let t = Truth::try_from(&m).ok()?;
+    Some(TruthSample {
+        stamp_ns: t.stamp_ns,
+        lat_rad: t.lat_rad,
+        lon_rad: t.lon_rad,
+        depth_m: t.depth_m,
+        vel_ned_m_s: t.vel_ned_m_s,
+        attitude: t.attitude,
+        distance_m: scalar("TruthState", "distance_m", m.distance_m, 0.0, 1e9).ok()?,
+    })
+}
+
+/// Largest standard deviation taken as a covariance, m (beyond: not informative).
+const STD_MAX_M: f64 = 1e7;
+/// Largest local coordinate, m.
+const LOCAL_MAX_M: f64 = 1e7;
+
+fn estimate(kind: StreamKind, data: &[u8]) -> Option<EstimateSample> {
+    match kind {
+        StreamKind::Nav => nav(&codec::decode::<NavSolution>(data).ok()?).ok(),
+        StreamKind::Attitude => attitude(&codec::decode::<AttitudeEstimate>(data).ok()?),
+        StreamKind::Fix => fix(&codec::decode::<PositionFix>(data).ok()?).ok(),
+        StreamKind::Lbl => lbl(&codec::decode::<LblSolution>(data).ok()?).ok(),
+    }
+}
+
+fn empty(stamp_ns: u64) -> EstimateSample {
+    EstimateSample {
+        stamp_ns,
+        pos: None,
+        depth_m: None,
+        vel_ned_m_s: None,
+        attitude: None,
+        cov_ne_m2: None,
+        att_std_rad: None,
+        innovation: None,
+    }
+}
+
+/// A diagonal or correlated north/east covariance from standard deviations;
+/// `None` when either is zero (unknown) or the correlation is degenerate.
+fn cov_ne(std_n: f64, std_e: f64, corr: f64) -> Option<Matrix2<f64>> {
+    (std_n > 0.0 && std_e > 0.0 && corr.abs() < 1.0).then(|| {
+        let c = corr * std_n * std_e;
+        Matrix2::new(std_n * std_n, c, c, std_e * std_e)
+    })
+}
+
+fn nav(m: &NavSolution) -> Result<EstimateSample, checked::ValidationError> {
+    const T: &str = "NavSolution";
+    let lat_rad = scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?;
+    let lon_rad = scalar(T, "lon_rad", m.lon_rad, -PI, PI)?;
+    let depth = scalar(
+        T,
+        "depth_m",
+        m.depth_m,
+        limits::DEPTH_MIN_M,
+        limits::DEPTH_MAX_M,
+    )?;
+    let vel = vector(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?;
+    let attitude = if m.quat_nb == [0.0; 4] {
+        None
+    } else {
+        Some(quaternion(T, "quat_nb", m.quat_nb)?)
+    };
+    for s in m.pos_std_ned_m {
+        scalar(T, "pos_std_ned_m", s, 0.0, STD_MAX_M)?;
+    }
+    Ok(EstimateSample {
+        pos: Some(Horizontal::Geodetic { lat_rad, lon_rad }),
+        depth_m: Some(depth),
+        vel_ned_m_s: Some(vel),
+        attitude,
+        cov_ne_m2: cov_ne(m.pos_std_ned_m[0], m.pos_std_ned_m[1], 0.0),
+        ..empty(m.header.stamp_ns)
+    })
+}
+
+fn attitude(m: &AttitudeEstimate) -> Option<EstimateSample> {
+    let a = checked::Attitude::try_from(m).ok()?;
+    Some(EstimateSample {
+        attitude: Some(a.attitude),
+        att_std_rad: (a.std_rad.iter().all(|s| *s > 0.0)).then_some(a.std_rad),
+        ..empty(a.stamp_ns)
+    })
+}
+
+fn fix(m: &PositionFix) -> Result<EstimateSample, checked::ValidationError> {
+    const T: &str = "PositionFix";
+    let lat_rad = scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?;
+    let lon_rad = scalar(T, "lon_rad", m.lon_rad, -PI, PI)?;
+    let std_n = scalar(T, "std_north_m", m.std_north_m, 0.0, STD_MAX_M)?;
+    let std_e = scalar(T, "std_east_m", m.std_east_m, 0.0, STD_MAX_M)?;
+    let corr = scalar(T, "corr_ne", m.corr_ne, -1.0, 1.0)?;
+    Ok(EstimateSample {
+        pos: Some(Horizontal::Geodetic { lat_rad, lon_rad }),
+        cov_ne_m2: cov_ne(std_n, std_e, corr),
+        ..empty(m.header.stamp_ns)
+    })
+}
+
+fn lbl(m: &LblSolution) -> Result<EstimateSample, checked::ValidationError> {
+    const T: &str = "LblSolution";
+    let north_m = scalar(T, "x_m", m.x_m, -LOCAL_MAX_M, LOCAL_MAX_M)?;
+    let east_m = scalar(T, "y_m", m.y_m, -LOCAL_MAX_M, LOCAL_MAX_M)?;
+    let big = STD_MAX_M * STD_MAX_M;
+    let pxx = scalar(T, "p", m.p[0][0], -big, big)?;
+    let pxy = scalar(T, "p", m.p[0][1], -big, big)?;
+    let pyx = scalar(T, "p", m.p[1][0], -big, big)?;
+    let pyy = scalar(T, "p", m.p[1][1], -big, big)?;
+    // Paper 003 §V-A: P_xy, the x-y block of P, is the position covariance.
+    let sym = 0.5 * (pxy + pyx);
+    let cov = (pxx > 0.0 && pyy > 0.0 && pxx * pyy - sym * sym > 0.0)
+        .then(|| Matrix2::new(pxx, sym, sym, pyy));
+    let innovation = m.last_innovation_m.is_finite().then_some(Innovation {
+        residual_m: m.last_innovation_m,
+        transponder_id: m.transponder_id,
+        accepted: m.accepted != 0,
+    });
+    Ok(EstimateSample {
+        pos: Some(Horizontal::Local { north_m, east_m }),
+        cov_ne_m2: cov,
+        innovation,
+        ..empty(m.header.stamp_ns)
+    })
+}
