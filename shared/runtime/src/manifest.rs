@@ -460,12 +460,15 @@ fn line_of(text: &str, key: &str) -> Option<usize> {
     let last = key.rsplit('.').next()?;
     let section = key.rsplit_once('.').map(|(s, _)| s).unwrap_or("");
     let mut in_section = section.is_empty();
+    // A key of a section the file does not have (added by `--set`) has no line.
+    let mut section_seen = in_section;
     let mut fallback = None;
     for (i, line) in text.lines().enumerate() {
         let t = line.trim();
         if t.starts_with('[') {
             let name = t.trim_matches(|c| c == '[' || c == ']').trim();
             in_section = name == section || section.starts_with(&format!("{name}."));
+            section_seen |= in_section;
             continue;
         }
         let Some((k, _)) = t.split_once('=') else {
@@ -479,7 +482,7 @@ fn line_of(text: &str, key: &str) -> Option<usize> {
             fallback.get_or_insert(i + 1);
         }
     }
-    fallback
+    fallback.filter(|_| section_seen)
 }
 
 /// Whether `line` sets `key` inside an inline table (`x = { key = 1 }`).
