@@ -37,7 +37,7 @@ use nauta_messages::checked::Imu;
 mod tests;
 
 /// The variants this binary implements; the first is the default.
-pub const VARIANTS: [&str; 3] = ["gyro", "mekf", "pf"];
+pub const VARIANTS: [&str; 3] = ["pf", "gyro", "mekf"];
 
 /// Parameters of the `gyro` variant (`[process.attitude.variants.gyro]` over
 /// `[process.attitude.params]`).

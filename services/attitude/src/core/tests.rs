@@ -248,7 +248,7 @@ fn pf_params_default_and_refuse_unknown_keys() {
         ..Default::default()
     };
     assert!(AttitudeCore::new(&VariantParams::Pf(bad), 0.5, 0.0).is_err());
-    assert_eq!(VARIANTS, ["gyro", "mekf", "pf"]);
+    assert_eq!(VARIANTS, ["pf", "gyro", "mekf"]);
 }
 
 /// `gyro` and `pf` cores (defaults, `alignment_samples = 400`) over
