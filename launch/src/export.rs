@@ -110,25 +110,9 @@ fn transponders_from_run(meta: &BTreeMap<String, String>) -> Vec<Transponder> {
 }
 
 fn sensor_transponders(text: &str) -> Option<Vec<Transponder>> {
-    let section: toml::Table = toml::from_str(text).ok()?;
-    let mut params = section.get("params")?.as_table()?.clone();
-    if let Some(v) = section.get("variant").and_then(toml::Value::as_str)
-        && let Some(toml::Value::Table(over)) = section.get(&format!("variants.{v}"))
-    {
-        overlay(&mut params, over.clone());
-    }
-    let sensors = params.remove("sensors");
-    params.remove("lbl_sync_hz");
-    let scenario: nauta_sim::scenario::ScenarioParams = params.try_into().ok()?;
-    let preset = scenario.sensors_preset();
-    let config: nauta_sim::suite::SuiteConfig = match sensors {
-        Some(toml::Value::Table(over)) => {
-            let mut merged = toml::Table::try_from(&preset).ok()?;
-            overlay(&mut merged, over);
-            merged.try_into().ok()?
-        }
-        _ => preset,
-    };
+    let config = nauta_sim::params::SensorParams::from_recorded_section(text, "sensor_config")
+        .ok()?
+        .sensors;
     if !config.lbl.enabled {
         return None;
     }
@@ -145,19 +129,6 @@ fn sensor_transponders(text: &str) -> Option<Vec<Transponder>> {
             })
             .collect(),
     )
-}
-
-/// Lays `over` onto `base`: tables merge key by key, anything else replaces
-/// (as the sensor process does).
-fn overlay(base: &mut toml::Table, over: toml::Table) {
-    for (k, v) in over {
-        match (base.get_mut(&k), v) {
-            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => overlay(b, o),
-            (_, v) => {
-                base.insert(k, v);
-            }
-        }
-    }
 }
 
 /// Runs `nauta export`.

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod bench;
+mod calibrate;
 mod children;
 mod eval;
 mod export;
@@ -83,6 +84,13 @@ enum Command {
     Export(export::ExportArgs),
     /// PNG plots of a recording and an index.html with the eval table.
     Report(report::ReportArgs),
+    /// Sensor calibration: `nauta calibrate magnetometer launch/survey.toml`
+    /// prints the attitude parameters that remove the magnetometer's hard and
+    /// soft iron.
+    Calibrate {
+        #[command(subcommand)]
+        which: CalibrateCommand,
+    },
     /// Turn an outside data set into a recording to replay:
     /// `nauta import broad TRIAL.csv.gz -o OUT.mcap`.
     Import {
@@ -101,6 +109,14 @@ enum Command {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<String>,
     },
+}
+
+#[derive(Debug, Subcommand)]
+enum CalibrateCommand {
+    /// Hard and soft iron (paper 000 §IV-A): of a manifest's simulated
+    /// magnetometer (a simulated manoeuvre at its site), or of a recorded
+    /// manoeuvre (`--from FILE --field-ut F`).
+    Magnetometer(calibrate::MagnetometerArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -207,6 +223,9 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Eval(args) => eval::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Report(args) => report::run(&args),
+        Command::Calibrate { which } => match which {
+            CalibrateCommand::Magnetometer(args) => calibrate::magnetometer(&args),
+        },
         Command::Import { which } => match which {
             ImportCommand::Broad(args) => import::broad(&args),
         },

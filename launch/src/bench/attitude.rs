@@ -479,22 +479,32 @@ fn random_attitude(rng: &mut ChaCha8Rng) -> UnitQuaternion<f64> {
     ))
 }
 
+/// A calibration manoeuvre on deck, simulated: the magnetometer `spec` (its
+/// hard and soft iron and noise) turned through 2,000 random attitudes in the
+/// field `field_ned_t` (T); the readings, µT.
+pub fn magnetometer_manoeuvre(
+    spec: MagnetometerSpec,
+    field_ned_t: &Vector3<f64>,
+    seed: u64,
+) -> anyhow::Result<Vec<Vector3<f64>>> {
+    let mut noise = MagnetometerNoise::new(spec)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    Ok((0..SIM_CALIBRATION_SAMPLES)
+        .map(|_| {
+            let q = random_attitude(&mut rng);
+            noise.next(&mut rng, q.inverse_transform_vector(field_ned_t)) * 1e6
+        })
+        .collect())
+}
+
 /// Paper 000 §IV-A's magnetometer calibration for a simulated run: the
-/// preset magnetometer `spec` turned through random attitudes in the field
-/// `field_ned_t` (T), fitted with the default method.
+/// manoeuvre of [`magnetometer_manoeuvre`], fitted with the default method.
 fn calibrate_magnetometer(
     spec: MagnetometerSpec,
     field_ned_t: &Vector3<f64>,
     seed: u64,
 ) -> anyhow::Result<MagCalibration> {
-    let mut noise = MagnetometerNoise::new(spec)?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let samples: Vec<Vector3<f64>> = (0..SIM_CALIBRATION_SAMPLES)
-        .map(|_| {
-            let q = random_attitude(&mut rng);
-            noise.next(&mut rng, q.inverse_transform_vector(field_ned_t)) * 1e6
-        })
-        .collect();
+    let samples = magnetometer_manoeuvre(spec, field_ned_t, seed)?;
     Ok(calibration::fit(
         &samples,
         field_ned_t.norm() * 1e6,

@@ -22,11 +22,17 @@
 //!   magnetic reference from the alignment's mean field. Parameters in
 //!   `shared/estimation/src/pf/params.rs`
 //!   (`variants.pf = { alignment_samples = 400, filter = { particles = 1000 } }`).
+//!
+//! Every variant first corrects each magnetometer sample with the configured
+//! hard- and soft-iron calibration ([`MagnetometerParams`]; paper 000 §IV-A
+//! calibrates the magnetometer before the filter), the alignment's mean field
+//! included; without one the samples are used as they come.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 
 use nauta_estimation::alignment::Alignment;
+use nauta_estimation::calibration::MagCalibration;
 use nauta_estimation::earth::earth_rate_ned;
 use nauta_estimation::mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
 use nauta_estimation::pf::{ParticleFilter, PfConfig, PfParams};
@@ -39,6 +45,37 @@ mod tests;
 /// The variants this binary implements; the first is the default.
 pub const VARIANTS: [&str; 3] = ["pf", "gyro", "mekf"];
 
+/// The magnetometer's calibration, `m = W (m̃ − h)` (C1 of
+/// `nauta_estimation::calibration::magnetometer`), in the parameters of every
+/// variant (`params.magnetometer = { hard_iron_ut = [..], soft_iron_inv = [[..], [..], [..]] }`);
+/// `nauta calibrate magnetometer` fits one. Default: none (h = 0, W = I).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MagnetometerParams {
+    /// Hard iron `h`, µT, sensor frame.
+    pub hard_iron_ut: [f64; 3],
+    /// `W`, the inverse of the soft iron, by rows.
+    pub soft_iron_inv: [[f64; 3]; 3],
+}
+
+impl Default for MagnetometerParams {
+    fn default() -> Self {
+        Self {
+            hard_iron_ut: [0.0; 3],
+            soft_iron_inv: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        }
+    }
+}
+
+impl MagnetometerParams {
+    /// The checked calibration (finite, `W` invertible).
+    pub fn calibration(&self) -> anyhow::Result<MagCalibration> {
+        let w = Matrix3::from_fn(|r, c| self.soft_iron_inv[r][c]);
+        MagCalibration::new(Vector3::from(self.hard_iron_ut), w)
+            .map_err(|e| anyhow::anyhow!("magnetometer: {e}"))
+    }
+}
+
 /// Parameters of the `gyro` variant (`[process.attitude.variants.gyro]` over
 /// `[process.attitude.params]`).
 #[derive(Debug, Clone, Deserialize)]
@@ -47,12 +84,15 @@ pub struct GyroParams {
     /// Still samples averaged for the initial alignment (paper 000 averages 400 for
     /// its static calibration; 200 is 2 s at 100 Hz).
     pub alignment_samples: usize,
+    /// The magnetometer's calibration (the alignment's heading uses the field).
+    pub magnetometer: MagnetometerParams,
 }
 
 impl Default for GyroParams {
     fn default() -> Self {
         GyroParams {
             alignment_samples: 200,
+            magnetometer: MagnetometerParams::default(),
         }
     }
 }
@@ -76,6 +116,8 @@ pub struct MekfVariantParams {
     /// Initial heading 1σ, degrees, when the alignment was not still. Default 30
     /// (our choice).
     pub moving_alignment_heading_std_deg: f64,
+    /// The magnetometer's calibration.
+    pub magnetometer: MagnetometerParams,
     /// The filter's parameters.
     pub filter: MekfParams,
 }
@@ -87,6 +129,7 @@ impl Default for MekfVariantParams {
             still_gyro_rms_deg_s: 1.0,
             moving_alignment_tilt_std_deg: 20.0,
             moving_alignment_heading_std_deg: 30.0,
+            magnetometer: MagnetometerParams::default(),
             filter: MekfParams::default(),
         }
     }
@@ -109,6 +152,8 @@ pub struct PfVariantParams {
     /// Initial heading 1σ, degrees, when the alignment was not still.
     /// Default 30 (as the `mekf`).
     pub moving_alignment_heading_std_deg: f64,
+    /// The magnetometer's calibration.
+    pub magnetometer: MagnetometerParams,
     /// The filter's parameters.
     pub filter: PfParams,
 }
@@ -120,6 +165,7 @@ impl Default for PfVariantParams {
             still_gyro_rms_deg_s: 1.0,
             moving_alignment_tilt_std_deg: 20.0,
             moving_alignment_heading_std_deg: 30.0,
+            magnetometer: MagnetometerParams::default(),
             filter: PfParams::default(),
         }
     }
@@ -134,6 +180,17 @@ pub enum VariantParams {
     Mekf(MekfVariantParams),
     /// `pf`.
     Pf(PfVariantParams),
+}
+
+impl VariantParams {
+    /// The magnetometer's calibration parameters.
+    pub fn magnetometer(&self) -> &MagnetometerParams {
+        match self {
+            VariantParams::Gyro(p) => &p.magnetometer,
+            VariantParams::Mekf(p) => &p.magnetometer,
+            VariantParams::Pf(p) => &p.magnetometer,
+        }
+    }
 }
 
 /// The checked form of [`VariantParams`].
@@ -242,6 +299,7 @@ pub struct AttitudeCore {
     latitude_rad: f64,
     declination_rad: f64,
     alignment_samples: usize,
+    magnetometer: MagCalibration,
 }
 
 impl AttitudeCore {
@@ -298,6 +356,7 @@ impl AttitudeCore {
                 )
             }
         };
+        let magnetometer = params.magnetometer().calibration()?;
         let alignment_samples = alignment_samples.max(1);
         let alignment = Alignment::new(declination_rad, alignment_samples)?;
         anyhow::ensure!(
@@ -310,6 +369,7 @@ impl AttitudeCore {
             latitude_rad,
             declination_rad,
             alignment_samples,
+            magnetometer,
         })
     }
 
@@ -332,6 +392,10 @@ impl AttitudeCore {
 
     /// Processes one checked IMU sample; returns the estimate once aligned.
     pub fn step(&mut self, imu: &Imu) -> anyhow::Result<Option<AttitudeOutput>> {
+        let imu = &Imu {
+            mag_ut: self.magnetometer.apply(&imu.mag_ut),
+            ..*imu
+        };
         if let Phase::Restoring(snapshot, after) = &self.phase {
             if imu.stamp_ns <= *after {
                 return Ok(None);
@@ -389,6 +453,11 @@ impl AttitudeCore {
             Phase::Running(est) => Some(est.get().snapshot()),
             Phase::Aligning(..) | Phase::Restoring(..) => None,
         }
+    }
+
+    /// True when a magnetometer calibration other than none is applied.
+    pub fn magnetometer_calibrated(&self) -> bool {
+        self.magnetometer != MagCalibration::identity()
     }
 
     /// True once aligned.

@@ -265,11 +265,14 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
                     continue;
                 }
                 if let Some(out) = out {
-                    let calibration = if core.is_aligned() {
+                    let mut calibration = if core.is_aligned() {
                         calibration::ALIGNED
                     } else {
                         calibration::NONE
                     };
+                    if core.magnetometer_calibrated() {
+                        calibration |= calibration::MAGNETOMETER;
+                    }
                     let estimate = AttitudeEstimate {
                         header: Header::new(stamp, 0, Role::Attitude, ctx.instance),
                         quat_nb: [out.q_nb.w, out.q_nb.i, out.q_nb.j, out.q_nb.k],

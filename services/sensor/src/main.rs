@@ -19,12 +19,11 @@ use nauta_sim::scenario::Generator;
 
 mod lbl_link;
 mod outputs;
-mod params;
 mod replay;
 
 use lbl_link::{LblLink, Waited};
+use nauta_sim::params::SensorParams;
 use outputs::Outputs;
-use params::SensorParams;
 
 /// Publishes the sensors and the truth of a simulated mission.
 #[derive(Debug, Parser)]

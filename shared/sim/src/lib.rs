@@ -22,6 +22,7 @@ pub mod environment;
 pub mod guidance;
 pub mod mission;
 pub mod noise;
+pub mod params;
 pub mod scenario;
 pub mod suite;
 pub mod trajectory;

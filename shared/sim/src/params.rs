@@ -1,12 +1,14 @@
-//! `[process.sensor.params]`: the scenario ([`ScenarioParams`], every key
+//! `[process.sensor.params]` of a manifest, as the sensor process reads it
+//! (and the tools that need the run's sensors: export, calibration): the scenario ([`ScenarioParams`], every key
 //! optional), a `sensors` table laid over the scenario's sensor preset
 //! ([`ScenarioParams::sensors_preset`]; any value of [`SuiteConfig`] can be
 //! changed, e.g. `--set sensor.params.sensors.dvl.noise.spike_probability=0.01`),
 //! and the LBL synchronisation rate.
 
 use anyhow::{Context as _, bail};
-use nauta_sim::scenario::ScenarioParams;
-use nauta_sim::suite::SuiteConfig;
+
+use crate::scenario::ScenarioParams;
+use crate::suite::SuiteConfig;
 
 /// Default rate of the LBL synchronisation points, Hz (the `lbl/nav` rate of
 /// DESIGN §4).
@@ -69,8 +71,30 @@ impl SensorParams {
     }
 }
 
+impl SensorParams {
+    /// The parameters of a sensor section as `nauta-logger` records it
+    /// (`sensor_config.<process>` of `nauta.run`: TOML with `params`, the
+    /// `variant` and each `variants.V` table): the chosen variant's table laid
+    /// over `params`, as the manifest is read.
+    pub fn from_recorded_section(text: &str, place: &str) -> anyhow::Result<Self> {
+        let section: toml::Table = toml::from_str(text)
+            .map_err(|e| anyhow::anyhow!("{place}: {}", e.to_string().trim_end()))?;
+        let mut params = match section.get("params") {
+            Some(toml::Value::Table(t)) => t.clone(),
+            None => toml::Table::new(),
+            Some(other) => bail!("{place}.params: expected a table, got {other}"),
+        };
+        if let Some(v) = section.get("variant").and_then(toml::Value::as_str)
+            && let Some(toml::Value::Table(over)) = section.get(&format!("variants.{v}"))
+        {
+            overlay(&mut params, over.clone());
+        }
+        Self::from_table(params, place)
+    }
+}
+
 /// Lays `over` onto `base`: tables merge key by key, anything else replaces.
-fn overlay(base: &mut toml::Table, over: toml::Table) {
+pub fn overlay(base: &mut toml::Table, over: toml::Table) {
     for (k, v) in over {
         match (base.get_mut(&k), v) {
             (Some(toml::Value::Table(b)), toml::Value::Table(o)) => overlay(b, o),
@@ -84,7 +108,7 @@ fn overlay(base: &mut toml::Table, over: toml::Table) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nauta_sim::scenario::ScenarioKind;
+    use crate::scenario::ScenarioKind;
 
     fn parse(text: &str) -> anyhow::Result<SensorParams> {
         SensorParams::from_table(text.parse::<toml::Table>()?, "process.sensor.params")
@@ -118,7 +142,7 @@ sensors.lbl.noise.multipath_probability = 0.2
         assert_eq!(p.sensors.lbl.noise.multipath_probability, 0.2);
         assert_eq!(
             p.sensors.lbl.noise.clock_resolution,
-            SuiteConfig::lbl(nauta_sim::suite::LblLayout::Four)
+            SuiteConfig::lbl(crate::suite::LblLayout::Four)
                 .lbl
                 .noise
                 .clock_resolution
