@@ -7,17 +7,7 @@ use nauta_messages::{Header, IMU_SERVICE, ImuSample, Role};
 use nauta_tests::*;
 
 fn nauta(args: &[&std::ffi::OsStr]) -> (Option<i32>, String, String) {
-    let out = std::process::Command::new(bin("nauta"))
-        .args(args)
-        .current_dir(workspace_root())
-        .stdin(std::process::Stdio::null())
-        .output()
-        .expect("run nauta");
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    nauta_cli(args)
 }
 
 /// The `magnetometer = {...}` line of the command's output, parsed.

@@ -29,17 +29,7 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn nauta(args: &[&std::ffi::OsStr]) -> (Option<i32>, String, String) {
-    let out = std::process::Command::new(bin("nauta"))
-        .args(args)
-        .current_dir(workspace_root())
-        .stdin(std::process::Stdio::null())
-        .output()
-        .expect("run nauta");
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    nauta_cli(args)
 }
 
 fn log_info(file: &Path) -> serde_json::Value {

@@ -268,7 +268,7 @@ fn run_pf(kind: ScenarioKind, duration_s: f64) -> ([f64; 3], [f64; 3]) {
     let mut generator =
         Generator::new(&params, origin, sensors, SEED, duration_s).expect("valid scenario");
     let declination = generator.simulator().environment().magnetic.declination_rad;
-    let mut gyro = AttitudeCore::new(
+    let gyro = AttitudeCore::new(
         &VariantParams::Gyro(GyroParams {
             alignment_samples: 400,
             ..Default::default()
@@ -277,7 +277,7 @@ fn run_pf(kind: ScenarioKind, duration_s: f64) -> ([f64; 3], [f64; 3]) {
         declination,
     )
     .expect("valid");
-    let mut pf = AttitudeCore::new(
+    let pf = AttitudeCore::new(
         &VariantParams::Pf(PfVariantParams {
             alignment_samples: 400,
             filter: PfParams::default(),
@@ -287,27 +287,8 @@ fn run_pf(kind: ScenarioKind, duration_s: f64) -> ([f64; 3], [f64; 3]) {
         declination,
     )
     .expect("valid");
-    let (mut g, mut p) = (Rms::default(), Rms::default());
-    while let Some(m) = generator.step() {
-        let m = m.expect("valid step");
-        let Some(r) = m.imu else { continue };
-        let imu = Imu {
-            stamp_ns: r.stamp_ns,
-            interval_s: r.interval_s,
-            gyro_rad_s: Vector3::from(r.gyro_rad_s),
-            accel_m_s2: Vector3::from(r.accel_m_s2),
-            mag_ut: Vector3::from(r.mag_ut),
-        };
-        let [w, x, y, z] = m.truth.quat_nb;
-        let truth = UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z));
-        if let Some(o) = gyro.step(&imu).expect("step") {
-            g.push(&AttitudeError::between(&o.q_nb, &truth));
-        }
-        if let Some(o) = pf.step(&imu).expect("step") {
-            p.push(&AttitudeError::between(&o.q_nb, &truth));
-        }
-    }
-    (g.deg(), p.deg())
+    let [g, p] = score(&mut generator, &mut [gyro, pf]);
+    (g, p)
 }
 
 /// Paper 000's three motions, 5 minutes each, seed 7, clean magnetometer:
@@ -420,7 +401,7 @@ fn run_pf_distorted(
     let mut generator = Generator::new(&params, origin, params.sensors_preset(), SEED, duration_s)
         .expect("valid scenario");
     let declination = generator.simulator().environment().magnetic.declination_rad;
-    let mut pf = AttitudeCore::new(
+    let pf = AttitudeCore::new(
         &VariantParams::Pf(PfVariantParams {
             alignment_samples: 400,
             magnetometer,
@@ -430,7 +411,17 @@ fn run_pf_distorted(
         declination,
     )
     .expect("valid");
-    let mut p = Rms::default();
+    let [p] = score(&mut generator, &mut [pf]);
+    p
+}
+
+/// Runs `cores` over every IMU sample of `generator`; the RMS roll, pitch,
+/// yaw of each against the truth, degrees.
+fn score<const N: usize>(
+    generator: &mut Generator,
+    cores: &mut [AttitudeCore; N],
+) -> [[f64; 3]; N] {
+    let mut rms = [Rms::default(); N];
     while let Some(m) = generator.step() {
         let m = m.expect("valid step");
         let Some(r) = m.imu else { continue };
@@ -443,11 +434,13 @@ fn run_pf_distorted(
         };
         let [w, x, y, z] = m.truth.quat_nb;
         let truth = UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z));
-        if let Some(o) = pf.step(&imu).expect("step") {
-            p.push(&AttitudeError::between(&o.q_nb, &truth));
+        for (core, acc) in cores.iter_mut().zip(rms.iter_mut()) {
+            if let Some(o) = core.step(&imu).expect("step") {
+                acc.push(&AttitudeError::between(&o.q_nb, &truth));
+            }
         }
     }
-    p.deg()
+    rms.map(|r| r.deg())
 }
 
 /// The configured magnetometer calibration is applied to every sample: with
