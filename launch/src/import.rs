@@ -5,18 +5,19 @@
 //!
 //! A BROAD trial (Laidig et al., "BROAD - A Benchmark for Robust Inertial
 //! Orientation Estimation", Data 6(7):72, 2021, CC BY 4.0) becomes:
-//! - `sensor/imu`: every sample, stamped at the end of its 3.5 ms interval
-//!   (`t_s + 0.0035 s`), in the IMU's own frame (see `nauta_datasets::broad`:
+//! - `sensor/imu`: every sample, stamped `t_s + 0.0035 s` (the end of its
+//!   interval, which is the time since the previous sample), in the IMU's own frame (see `nauta_datasets::broad`:
 //!   any right-handed body frame will do);
 //! - `sim/truth`: the optical reference of every sample where the markers were
 //!   seen, as body → NED (`ned_from_enu`), at the site below, still (the
 //!   channel nauta's tools take as the truth);
 //! - metadata `nauta.run` with a manifest to replay it: the sensor and the
 //!   attitude process (`pf`, alignment over the first 400 samples: every
-//!   trial starts at rest), site Berlin (52.51° N, 13.32° E, where BROAD was
-//!   recorded) with declination 0, because the reference frame's north is
-//!   magnetic north (`launch/src/bench/attitude.rs` explains the check), and
-//!   `nauta.import` naming the source.
+//!   trial starts at rest), by default site Berlin (52.51° N, 13.32° E, where
+//!   BROAD was recorded) with declination 0, because the reference frame's
+//!   north is magnetic north (`launch/src/bench/attitude.rs` explains the
+//!   check); `--site` and `--declination` for other data in BROAD's format;
+//!   and `nauta.import` naming the source.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -41,10 +42,68 @@ pub struct ImportBroadArgs {
     /// The attitude variant the recorded manifest runs on replay.
     #[arg(long, default_value = "pf")]
     pub variant: String,
+    /// Where the data were recorded, `LAT,LON` in degrees (default: Berlin,
+    /// where BROAD was recorded).
+    #[arg(long, value_name = "LAT,LON", allow_hyphen_values = true)]
+    pub site: Option<String>,
+    /// Magnetic declination of the reference's north, degrees east (default 0:
+    /// BROAD's reference frame points its north at magnetic north).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub declination: f64,
 }
 
-fn manifest(name: &str, duration_s: f64, variant: &str) -> String {
-    let (lat, lon) = BROAD_SITE_DEG;
+/// Where a trial was recorded and what its reference's north is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImportSite {
+    /// Latitude, degrees.
+    pub latitude_deg: f64,
+    /// Longitude, degrees.
+    pub longitude_deg: f64,
+    /// Magnetic declination of the reference's north, degrees east.
+    pub declination_deg: f64,
+}
+
+impl ImportSite {
+    /// BROAD's: Berlin, declination 0.
+    pub fn broad() -> Self {
+        Self {
+            latitude_deg: BROAD_SITE_DEG.0,
+            longitude_deg: BROAD_SITE_DEG.1,
+            declination_deg: 0.0,
+        }
+    }
+
+    fn from_args(args: &ImportBroadArgs) -> anyhow::Result<Self> {
+        let mut site = Self::broad();
+        if let Some(text) = &args.site {
+            let (lat, lon) = text
+                .split_once(',')
+                .with_context(|| format!("--site {text:?}: expected LAT,LON in degrees"))?;
+            let num = |s: &str| {
+                s.trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .with_context(|| format!("--site {text:?}: {s:?} is not a number"))
+            };
+            site.latitude_deg = num(lat)?;
+            site.longitude_deg = num(lon)?;
+            anyhow::ensure!(
+                site.latitude_deg.abs() <= 90.0 && site.longitude_deg.abs() <= 180.0,
+                "--site {text:?}: out of range"
+            );
+        }
+        anyhow::ensure!(
+            args.declination.is_finite() && args.declination.abs() <= 180.0,
+            "--declination must be in [-180, 180] degrees"
+        );
+        site.declination_deg = args.declination;
+        Ok(site)
+    }
+}
+
+fn manifest(name: &str, duration_s: f64, variant: &str, site: &ImportSite) -> String {
+    let (lat, lon, dec) = (site.latitude_deg, site.longitude_deg, site.declination_deg);
     format!(
         r#"# BROAD trial {name}, imported by `nauta import broad`: replay it with
 # `nauta replay FILE --fast --record RUN.mcap`, then `nauta eval RUN.mcap`.
@@ -56,7 +115,7 @@ seed = 0
 [site]
 latitude_deg = {lat}
 longitude_deg = {lon}
-magnetic_declination_deg = 0.0
+magnetic_declination_deg = {dec}
 
 [process.sensor]
 bin = "nauta-sensor"
@@ -77,13 +136,14 @@ pub fn write_broad(
     source: &Path,
     out: &Path,
     variant: &str,
+    site: &ImportSite,
 ) -> anyhow::Result<(u64, u64)> {
     let mut w = LogWriter::create(out, WriterOptions::default())?;
     let duration_s = trial.samples.last().map_or(0.0, |s| s.t_s) + 1.0;
     let mut run = BTreeMap::new();
     run.insert(
         "manifest".to_owned(),
-        manifest(&trial.name, duration_s, variant),
+        manifest(&trial.name, duration_s, variant, site),
     );
     run.insert("seed".to_owned(), "0".to_owned());
     run.insert("clock".to_owned(), "sim".to_owned());
@@ -91,9 +151,12 @@ pub fn write_broad(
         "command_line".to_owned(),
         std::env::args().collect::<Vec<_>>().join(" "),
     );
-    run.insert("origin_lat_deg".to_owned(), BROAD_SITE_DEG.0.to_string());
-    run.insert("origin_lon_deg".to_owned(), BROAD_SITE_DEG.1.to_string());
-    run.insert("magnetic_declination_deg".to_owned(), "0".to_owned());
+    run.insert("origin_lat_deg".to_owned(), site.latitude_deg.to_string());
+    run.insert("origin_lon_deg".to_owned(), site.longitude_deg.to_string());
+    run.insert(
+        "magnetic_declination_deg".to_owned(),
+        site.declination_deg.to_string(),
+    );
     w.metadata(nauta_log::META_RUN, run)?;
     let mut import = BTreeMap::new();
     import.insert("source".to_owned(), source.display().to_string());
@@ -108,9 +171,25 @@ pub fn write_broad(
     );
     w.metadata("nauta.import", import)?;
 
-    let (lat, lon) = (BROAD_SITE_DEG.0.to_radians(), BROAD_SITE_DEG.1.to_radians());
+    let (lat, lon) = (
+        site.latitude_deg.to_radians(),
+        site.longitude_deg.to_radians(),
+    );
     let (mut imu_n, mut truth_n) = (0u64, 0u64);
+    let mut previous_t = None;
     for s in &trial.samples {
+        // Each sample covers the interval since the previous one (BROAD's
+        // 3.5 ms; the first, one nominal period).
+        let interval_s = match previous_t {
+            Some(p) if s.t_s > p => s.t_s - p,
+            Some(p) => anyhow::bail!(
+                "{}: time goes from {p} s to {} s; it must increase",
+                source.display(),
+                s.t_s
+            ),
+            None => broad::SAMPLE_PERIOD_S,
+        };
+        previous_t = Some(s.t_s);
         let stamp_ns = ((s.t_s + broad::SAMPLE_PERIOD_S) * 1e9).round() as u64;
         // The log time of an import is the sample's own time.
         let log_ns = stamp_ns;
@@ -132,7 +211,7 @@ pub fn write_broad(
             gyro_rad_s: s.gyro_rad_s.into(),
             accel_m_s2: s.accel_m_s2.into(),
             mag_ut: s.mag_ut.into(),
-            interval_s: broad::SAMPLE_PERIOD_S,
+            interval_s,
         };
         w.write_message(IMU_SERVICE, log_ns, &imu)?;
         imu_n += 1;
@@ -150,7 +229,8 @@ pub fn broad(args: &ImportBroadArgs) -> anyhow::Result<ExitCode> {
     );
     let trial = broad::read_trial(&args.file)
         .with_context(|| format!("cannot import {}", args.file.display()))?;
-    let (imu, truth) = write_broad(&trial, &args.file, &args.output, &args.variant)?;
+    let site = ImportSite::from_args(args)?;
+    let (imu, truth) = write_broad(&trial, &args.file, &args.output, &args.variant, &site)?;
     eprintln!(
         "nauta: {} → {}: {} IMU samples, {} reference attitudes ({:.1} s)",
         trial.name,

@@ -278,6 +278,8 @@ fn swap_to_another_variant_and_back_is_seamless() {
     let ns = Namespace::unique();
     let watch = wall_watch(&ns);
     let mut follower = Follower::new(&watch);
+    // Recorded too: the swaps are lifecycle events of the recording (DESIGN §5).
+    let record = std::env::temp_dir().join(format!("nauta-swap-{}.mcap", ns.as_str()));
     let mut launch = start_launch(
         &wd,
         &[
@@ -289,6 +291,8 @@ fn swap_to_another_variant_and_back_is_seamless() {
             ns.as_str(),
             "--set",
             "attitude.variant=mekf",
+            "--record",
+            record.to_str().expect("utf-8 path"),
         ],
     );
     // Swap during the cruise (from t = 20 s; the vehicle starts moving at
@@ -347,6 +351,28 @@ fn swap_to_another_variant_and_back_is_seamless() {
         "{}",
         out.summary().line
     );
+    let (code, info, err) = nauta_cli(&[
+        "log".as_ref(),
+        "info".as_ref(),
+        record.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let info: serde_json::Value = serde_json::from_str(&info).expect("log info JSON");
+    let swapped: Vec<&serde_json::Value> = info["events"]
+        .as_array()
+        .expect("events")
+        .iter()
+        .filter(|e| e["kind"] == "swapped" && e["process"] == "attitude")
+        .collect();
+    assert_eq!(swapped.len(), 2, "{}", info["events"]);
+    let estimates = info["channels"]
+        .as_array()
+        .and_then(|c| c.iter().find(|c| c["topic"] == "attitude/estimate"))
+        .expect("attitude/estimate recorded");
+    assert_eq!(estimates["instances"], 3, "{estimates}");
+    assert_eq!(estimates["gaps"], 0, "{estimates}");
+    let _ = std::fs::remove_file(&record);
 }
 
 #[test]
