@@ -172,6 +172,12 @@ enum BenchCommand {
 }
 
 fn main() -> ExitCode {
+    // Output piped into `head` and the like: end quietly when the reader
+    // goes away, as Unix tools do, instead of panicking in `println!`.
+    // SAFETY: restoring a signal's default disposition, before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     nauta_runtime::process::init_tracing();
     let cli = Cli::parse();
     match run(cli) {
