@@ -451,11 +451,17 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
                 status.update(&mut sup, &observer, changed);
             }
             if wake == Wake::Tick {
+                let mut logger_restarted = false;
                 let _ = events.drain(|e| {
                     if e.kind == event_kind::READY {
                         ready_instances.insert((fixed_str(&e.process), e.instance));
+                        logger_restarted |= e.role == Role::Logger as u32 && e.instance > 0;
                     }
                 });
+                if logger_restarted {
+                    // Its new file starts with who runs, as the first one did.
+                    sup.announce_running(&mut ctx);
+                }
                 match sup.tick(&mut ctx, &mut taps, &mut observer, &ready_instances)? {
                     Outcome::Running => {}
                     Outcome::Finished => {

@@ -379,6 +379,16 @@ fn a_logger_killed_with_9_leaves_every_flushed_chunk_readable() {
     let info2 = log_info(&second);
     assert_eq!(info2["truncated"], false);
     assert_eq!(info2["metadata"]["nauta.run"]["instance"], "1");
+    // It starts with who runs, as the first file did.
+    let events = info2["events"].as_array().expect("events");
+    for process in ["sensor", "attitude", "logger"] {
+        assert!(
+            events
+                .iter()
+                .any(|e| e["kind"] == "started" && e["process"] == process),
+            "no started event of {process} in the restarted logger's file: {events:?}"
+        );
+    }
 }
 
 /// `nauta record -o FILE` attaches a logger to a running pipeline; it ends
