@@ -93,25 +93,14 @@ fn run(kind: ScenarioKind, duration_s: f64, clean_mag: bool) -> Outcome {
         mekf_inside_3_sigma: 0.0,
     };
     let mut inside = 0u64;
-    while let Some(m) = generator.step() {
-        let m = m.expect("valid step");
-        let Some(r) = m.imu else { continue };
-        let imu = Imu {
-            stamp_ns: r.stamp_ns,
-            interval_s: r.interval_s,
-            gyro_rad_s: Vector3::from(r.gyro_rad_s),
-            accel_m_s2: Vector3::from(r.accel_m_s2),
-            mag_ut: Vector3::from(r.mag_ut),
-        };
-        let [w, x, y, z] = m.truth.quat_nb;
-        let truth = UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z));
-        if let Some(o) = gyro.step(&imu).expect("step") {
-            out.gyro.push(&AttitudeError::between(&o.q_nb, &truth));
+    each_sample(&mut generator, |imu, truth| {
+        if let Some(o) = gyro.step(imu).expect("step") {
+            out.gyro.push(&AttitudeError::between(&o.q_nb, truth));
         }
-        if let Some(o) = mekf.step(&imu).expect("step") {
-            let e = AttitudeError::between(&o.q_nb, &truth);
+        if let Some(o) = mekf.step(imu).expect("step") {
+            let e = AttitudeError::between(&o.q_nb, truth);
             out.mekf.push(&e);
-            if r.stamp_ns as f64 * 1e-9 > 60.0 {
+            if imu.stamp_ns as f64 * 1e-9 > 60.0 {
                 let m = &mut out.mekf_max_after_60_s;
                 m[0] = m[0].max(e.roll_rad.abs().max(e.pitch_rad.abs()).to_degrees());
                 m[1] = m[1].max(e.yaw_rad.abs().to_degrees());
@@ -121,7 +110,7 @@ fn run(kind: ScenarioKind, duration_s: f64, clean_mag: bool) -> Outcome {
                 inside += 1;
             }
         }
-    }
+    });
     out.mekf_inside_3_sigma = inside as f64 / out.mekf.n.max(1) as f64;
     out
 }
@@ -346,18 +335,7 @@ fn pf_warm_starts_from_a_snapshot() {
     let mut pf = AttitudeCore::new(&pf_params, origin.lat_rad, declination).expect("valid");
     let mut mekf = AttitudeCore::new(&mekf_params, origin.lat_rad, declination).expect("valid");
     let mut imus = Vec::new();
-    while let Some(m) = generator.step() {
-        let m = m.expect("valid step");
-        if let Some(r) = m.imu {
-            imus.push(Imu {
-                stamp_ns: r.stamp_ns,
-                interval_s: r.interval_s,
-                gyro_rad_s: Vector3::from(r.gyro_rad_s),
-                accel_m_s2: Vector3::from(r.accel_m_s2),
-                mag_ut: Vector3::from(r.mag_ut),
-            });
-        }
-    }
+    each_sample(&mut generator, |imu, _| imus.push(*imu));
     let split = imus.len() / 2;
     for imu in &imus[..split] {
         pf.step(imu).expect("step");
@@ -422,6 +400,19 @@ fn score<const N: usize>(
     cores: &mut [AttitudeCore; N],
 ) -> [[f64; 3]; N] {
     let mut rms = [Rms::default(); N];
+    each_sample(generator, |imu, truth| {
+        for (core, acc) in cores.iter_mut().zip(rms.iter_mut()) {
+            if let Some(o) = core.step(imu).expect("step") {
+                acc.push(&AttitudeError::between(&o.q_nb, truth));
+            }
+        }
+    });
+    rms.map(|r| r.deg())
+}
+
+/// Calls `f` with every IMU sample of `generator`, checked, and the truth's
+/// attitude at its stamp.
+fn each_sample(generator: &mut Generator, mut f: impl FnMut(&Imu, &UnitQuaternion<f64>)) {
     while let Some(m) = generator.step() {
         let m = m.expect("valid step");
         let Some(r) = m.imu else { continue };
@@ -433,14 +424,11 @@ fn score<const N: usize>(
             mag_ut: Vector3::from(r.mag_ut),
         };
         let [w, x, y, z] = m.truth.quat_nb;
-        let truth = UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z));
-        for (core, acc) in cores.iter_mut().zip(rms.iter_mut()) {
-            if let Some(o) = core.step(&imu).expect("step") {
-                acc.push(&AttitudeError::between(&o.q_nb, &truth));
-            }
-        }
+        f(
+            &imu,
+            &UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z)),
+        );
     }
-    rms.map(|r| r.deg())
 }
 
 /// The configured magnetometer calibration is applied to every sample: with
