@@ -266,22 +266,39 @@ fn all_messages(file: &Path) -> (Vec<(String, Vec<u8>)>, bool) {
     (out, rec.recovery.truncated)
 }
 
-fn logger_status(ns: &str) -> Option<serde_json::Value> {
+/// `nauta status --json` of the run in `ns`, once it answers.
+fn status(ns: &str) -> Option<serde_json::Value> {
     let (code, out, _) = nauta(&[
         "status".as_ref(),
         "--json".as_ref(),
         "--namespace".as_ref(),
         ns.as_ref(),
     ]);
-    if code != Some(0) {
-        return None;
-    }
-    let s: serde_json::Value = serde_json::from_str(&out).ok()?;
-    s["processes"]
+    (code == Some(0)).then(|| serde_json::from_str(&out).ok())?
+}
+
+fn logger_status(ns: &str) -> Option<serde_json::Value> {
+    status(ns)?["processes"]
         .as_array()?
         .iter()
         .find(|p| p["name"] == "logger")
         .cloned()
+}
+
+/// The survey in `wall` clock at 10x in namespace `ns`, with `extra` options.
+fn start_wall_run(wd: &Watchdog, ns: &str, extra: &[&str]) -> Running {
+    let mut args = vec![
+        "--clock",
+        "wall",
+        "--rate",
+        "10",
+        "--duration",
+        "600",
+        "--namespace",
+        ns,
+    ];
+    args.extend_from_slice(extra);
+    start_launch(wd, &args)
 }
 
 /// Done when: the logger killed with `kill -9` mid-run: the file opens,
@@ -294,20 +311,10 @@ fn a_logger_killed_with_9_leaves_every_flushed_chunk_readable() {
     let dir = scratch("kill9");
     let file = dir.join("run.mcap");
     let ns = nauta_runtime::Namespace::unique();
-    let run = start_launch(
+    let run = start_wall_run(
         &wd,
-        &[
-            "--clock",
-            "wall",
-            "--rate",
-            "10",
-            "--duration",
-            "600",
-            "--namespace",
-            ns.as_str(),
-            "--record",
-            file.to_str().expect("utf-8 path"),
-        ],
+        ns.as_str(),
+        &["--record", file.to_str().expect("utf-8 path")],
     );
     // Running, and at least three flushes (one per second) on disk.
     let mut pid = 0;
@@ -400,33 +407,14 @@ fn nauta_record_attaches_to_a_running_pipeline() {
     let dir = scratch("attach");
     let file = dir.join("attached.mcap");
     let ns = nauta_runtime::Namespace::unique();
-    let run = start_launch(
-        &wd,
-        &[
-            "--clock",
-            "wall",
-            "--rate",
-            "10",
-            "--duration",
-            "600",
-            "--namespace",
-            ns.as_str(),
-        ],
-    );
+    let run = start_wall_run(&wd, ns.as_str(), &[]);
     assert!(
         wait_until(&wd, Duration::from_secs(60), || {
-            let (code, out, _) = nauta(&[
-                "status".as_ref(),
-                "--json".as_ref(),
-                "--namespace".as_ref(),
-                ns.as_str().as_ref(),
-            ]);
-            code == Some(0)
-                && serde_json::from_str::<serde_json::Value>(&out).is_ok_and(|s| {
-                    s["processes"]
-                        .as_array()
-                        .is_some_and(|p| p.iter().all(|p| p["state"] == "running"))
-                })
+            status(ns.as_str()).is_some_and(|s| {
+                s["processes"]
+                    .as_array()
+                    .is_some_and(|p| p.iter().all(|p| p["state"] == "running"))
+            })
         }),
         "the pipeline never ran\n{}",
         run.wait(&wd)
