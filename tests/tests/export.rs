@@ -175,79 +175,21 @@ fn write_recording(path: &Path) -> Value {
         let s = t.stamp_ns;
         let h = |role: Role, seq: u64| Header::new(s, seq, role, 0);
         first_truth.get_or_insert((t.lat_rad, t.lon_rad));
-        put(
-            &mut w,
-            "sim/truth",
-            enc(&TruthState {
-                header: h(Role::Sensor, n),
-                lat_rad: t.lat_rad,
-                lon_rad: t.lon_rad,
-                depth_m: t.depth_m,
-                vel_ned_m_s: t.vel_ned_m_s,
-                quat_nb: t.quat_nb,
-                rate_nb_body_rad_s: t.rate_nb_body_rad_s,
-                current_ned_m_s: t.current_ned_m_s,
-                distance_m: t.distance_m,
-            }),
-            s,
-        );
-        if let Some(r) = &m.imu {
-            put(
-                &mut w,
-                "sensor/imu",
-                enc(&ImuSample {
-                    header: Header::new(r.stamp_ns, n, Role::Sensor, 0),
-                    gyro_rad_s: r.gyro_rad_s,
-                    accel_m_s2: r.accel_m_s2,
-                    mag_ut: r.mag_ut,
-                    interval_s: r.interval_s,
-                }),
-                r.stamp_ns,
-            );
-        }
-        if let Some(r) = &m.depth {
-            put(
-                &mut w,
-                "sensor/depth",
-                enc(&DepthSample {
-                    header: Header::new(r.stamp_ns, n, Role::Sensor, 0),
-                    depth_m: r.depth_m,
-                }),
-                r.stamp_ns,
-            );
-        }
-        if let Some(r) = &m.gps {
-            put(
-                &mut w,
-                "sensor/gps",
-                enc(&GpsFix {
-                    header: Header::new(r.stamp_ns, n, Role::Sensor, 0),
-                    lat_rad: r.lat_rad,
-                    lon_rad: r.lon_rad,
-                    height_m: r.height_m,
-                    horizontal_std_m: r.horizontal_std_m,
-                    quality: r.quality,
-                    satellites: r.satellites,
-                }),
-                r.stamp_ns,
-            );
+        // The sensor channels the exports read, as the sensor publishes them.
+        let mut sensors = Vec::new();
+        nauta_sim::wire::to_wire(&m, &mut sensors);
+        for mut msg in sensors {
+            let topic = msg.service();
+            if matches!(
+                topic,
+                "sim/truth" | "sensor/imu" | "sensor/depth" | "sensor/gps" | "sensor/modem"
+            ) {
+                msg.header_mut().seq = n;
+                let stamp = msg.header().stamp_ns;
+                put(&mut w, topic, msg.encode().expect("encode"), stamp);
+            }
         }
         let (north, east) = origin.to_local(t.lat_rad, t.lon_rad);
-        if let Some(r) = &m.modem {
-            put(
-                &mut w,
-                "sensor/modem",
-                enc(&BuoyRange {
-                    header: Header::new(r.stamp_ns, n, Role::Sensor, 0),
-                    buoy_lat_rad: r.buoy_lat_rad,
-                    buoy_lon_rad: r.buoy_lon_rad,
-                    buoy_depth_m: r.buoy_depth_m,
-                    time_of_flight_s: r.time_of_flight_s,
-                    sound_speed_m_s: r.sound_speed_m_s,
-                }),
-                r.stamp_ns,
-            );
-        }
         // Synthetic estimates: the truth with a known error.
         let (nlat, nlon) = origin.to_geodetic(north + NAV_OFFSET_M.0, east + NAV_OFFSET_M.1);
         put(

@@ -43,7 +43,7 @@ fn generate() -> anyhow::Result<(Vec<Item>, f64)> {
         nauta_sim::wire::to_wire(&m, &mut scratch);
         for mut msg in scratch.drain(..) {
             let k = msg.order();
-            set_seq(&mut msg, seq[k]);
+            msg.header_mut().seq = seq[k];
             seq[k] += 1;
             if let SensorMessage::Imu(imu) = &msg {
                 let mut header = Header::new(imu.header.stamp_ns, est_seq, Role::Attitude, 0);
@@ -64,21 +64,6 @@ fn generate() -> anyhow::Result<(Vec<Item>, f64)> {
         }
     }
     Ok((items, g.t_s()))
-}
-
-fn set_seq(msg: &mut SensorMessage, seq: u64) {
-    let h = match msg {
-        SensorMessage::Truth(m) => &mut m.header,
-        SensorMessage::Imu(m) => &mut m.header,
-        SensorMessage::Ahrs(m) => &mut m.header,
-        SensorMessage::Dvl(m) => &mut m.header,
-        SensorMessage::Depth(m) => &mut m.header,
-        SensorMessage::Gps(m) => &mut m.header,
-        SensorMessage::Propeller(m) => &mut m.header,
-        SensorMessage::Modem(m) => &mut m.header,
-        SensorMessage::Lbl(m) => &mut m.header,
-    };
-    h.seq = seq;
 }
 
 /// Writes every item; returns (seconds, file bytes).

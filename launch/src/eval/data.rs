@@ -311,7 +311,8 @@ fn estimate(kind: StreamKind, data: &[u8]) -> Option<EstimateSample> {
     }
 }
 
-fn empty(stamp_ns: u64) -> EstimateSample {
+/// A sample at `stamp_ns` that carries nothing yet.
+pub(crate) fn empty(stamp_ns: u64) -> EstimateSample {
     EstimateSample {
         stamp_ns,
         pos: None,

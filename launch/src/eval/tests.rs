@@ -6,6 +6,7 @@ use nauta_messages::{Header, NavSolution, Role, codec};
 use nauta_sim::mission::Origin;
 
 use super::compute::*;
+use super::data::empty as sample;
 use super::data::*;
 use super::*;
 
@@ -34,19 +35,6 @@ fn straight_truth() -> Vec<TruthSample> {
             truth_sample(i * 10_000_000, lat, LON0, 0.1 * t, north)
         })
         .collect()
-}
-
-fn sample(stamp_ns: u64) -> EstimateSample {
-    EstimateSample {
-        stamp_ns,
-        pos: None,
-        depth_m: None,
-        vel_ned_m_s: None,
-        attitude: None,
-        cov_ne_m2: None,
-        att_std_rad: None,
-        innovation: None,
-    }
 }
 
 fn stream(kind: StreamKind, samples: Vec<EstimateSample>) -> Stream {

@@ -272,6 +272,22 @@ impl SensorMessage {
         }
     }
 
+    /// Its header, mutable.
+    pub fn header_mut(&mut self) -> &mut Header {
+        use crate::Message;
+        match self {
+            Self::Truth(m) => m.header_mut(),
+            Self::Imu(m) => m.header_mut(),
+            Self::Ahrs(m) => m.header_mut(),
+            Self::Dvl(m) => m.header_mut(),
+            Self::Depth(m) => m.header_mut(),
+            Self::Gps(m) => m.header_mut(),
+            Self::Propeller(m) => m.header_mut(),
+            Self::Modem(m) => m.header_mut(),
+            Self::Lbl(m) => m.header_mut(),
+        }
+    }
+
     /// Decodes a recorded payload of `service`; `None` for a service that is
     /// not a sensor service.
     pub fn decode(
