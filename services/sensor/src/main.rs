@@ -13,7 +13,7 @@ use anyhow::Context as _;
 use clap::Parser;
 use nauta_messages::*;
 use nauta_runtime::process::{ProcessArgs, service_main_checked};
-use nauta_runtime::{Context, ControlServer, Describe, HealthReporter, Manifest, Pacer};
+use nauta_runtime::{Context, ControlServer, Describe, HealthReporter, Lifecycle, Manifest, Pacer};
 use nauta_sim::mission::Origin;
 use nauta_sim::scenario::Generator;
 
@@ -75,34 +75,17 @@ fn main() -> ExitCode {
     )
 }
 
-/// Answers control requests: true if STOP was asked.
+/// Answers control requests (the shell's [`Lifecycle`] of a source): true if
+/// STOP was asked.
 pub(crate) fn serve_control(
     control: &mut ControlServer,
     ctx: &Context,
     last_stamp: u64,
 ) -> anyhow::Result<bool> {
-    let mut stop = false;
-    control.serve(|req| {
-        let status = match req.command {
-            command::STOP => {
-                stop = true;
-                0
-            }
-            command::SNAPSHOT_NOW => 0,
-            _ => 2,
-        };
-        ControlResponse {
-            header: Header::new(last_stamp, 0, Role::Sensor, ctx.instance),
-            status,
-            state: if stop {
-                state::DRAINING
-            } else {
-                state::RUNNING
-            },
-            last_stamp_ns: last_stamp,
-        }
-    })?;
-    Ok(stop)
+    let mut life = Lifecycle::source(ctx);
+    life.standby = false;
+    life.serve(ctx, control, last_stamp, Some(last_stamp))?;
+    Ok(life.stop)
 }
 
 /// Everything the sensor reads from the manifest, checked.
@@ -230,6 +213,16 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
             link.drain(&mut generator, m.stamp_ns, lbl_enabled, &mut health)?;
         }
         if steps.is_multiple_of(BATCH) {
+            // Without the LBL lockstep (whose sync points are the
+            // watermarks), a watermark per batch: every channel of this step
+            // is published, so nothing at or before it will come. A consumer
+            // of a sparse channel (GPS at the surface, the buoy every 30 s)
+            // then processes its other inputs without waiting for it.
+            if !lbl_enabled {
+                let published = out.published();
+                out.progress
+                    .publish(Progress::at(last_stamp + 1, Role::Sensor, published))?;
+            }
             out.flush();
             if serve_control(&mut control, ctx, last_stamp)? || ctx.termination_requested() {
                 stopped = true;
@@ -271,52 +264,13 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Started with `--standby`, a source opens its ports, reports ready and waits
-/// for the launcher's ACTIVATE, sent once every consumer has connected, so that
-/// nothing is published before anyone listens (DESIGN §5). False on STOP or a
+/// Started with `--standby`, a source waits for the launcher's ACTIVATE
+/// (the shell's [`Lifecycle::hold_until_activated`]). False on STOP or a
 /// termination signal.
 pub(crate) fn hold_until_activated(
     ctx: &Context,
     control: &mut ControlServer,
     health: &mut HealthReporter,
 ) -> anyhow::Result<bool> {
-    health.state = state::STANDBY;
-    let mut last_health = Instant::now();
-    loop {
-        let mut decision = None;
-        control.serve(|req| {
-            let status = match req.command {
-                command::ACTIVATE => {
-                    decision = Some(true);
-                    0
-                }
-                command::STOP => {
-                    decision = Some(false);
-                    0
-                }
-                command::SNAPSHOT_NOW => 0,
-                _ => 2,
-            };
-            ControlResponse {
-                header: Header::new(0, 0, Role::Sensor, ctx.instance),
-                status,
-                state: if decision == Some(true) {
-                    state::RUNNING
-                } else {
-                    state::STANDBY
-                },
-                last_stamp_ns: 0,
-            }
-        })?;
-        if let Some(d) = decision {
-            return Ok(d);
-        }
-        if last_health.elapsed() >= Duration::from_secs(1) {
-            last_health = Instant::now();
-            health.publish(ctx);
-        }
-        if !ctx.sleep(Duration::from_millis(1)) {
-            return Ok(false);
-        }
-    }
+    Lifecycle::source(ctx).hold_until_activated(ctx, control, health)
 }

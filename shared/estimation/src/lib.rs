@@ -10,15 +10,23 @@
 //!   rates, geodetic ↔ ECEF.
 //! - [`attitude`]: quaternion and Euler conventions, rotation vectors, the exact
 //!   attitude update and its sensor-side inverse, attitude error metrics.
+//! - [`attitude_core`]: the attitude role's estimator (alignment, then the
+//!   `pf`, `mekf` or `gyro` variant, magnetometer calibration applied first).
+//! - [`role`]: the [`Estimator`] trait every role's estimator implements for
+//!   the runtime's estimator shell.
 //! - [`alignment`]: static coarse alignment from accelerometer and magnetometer.
 //! - [`calibration`]: static gyro/accelerometer offsets and magnetometer hard-
 //!   and soft-iron calibration (least-squares ellipsoid, particle swarm).
 //! - [`estimator`]: the [`AttitudeEstimator`] role trait and its snapshot.
+//! - [`local`]: north/east/down about an origin: the exact local tangent plane
+//!   (through ECEF) every tool uses, and paper 002 eq. 4's flat form.
 //! - [`gyro`]: pure gyro integration, paper 000's baseline.
 //! - [`mekf`]: multiplicative extended Kalman filter for attitude and gyro bias,
 //!   aided by gravity and magnetic heading.
 //! - [`pf`]: paper 000's attitude particle filter, with gyro bias estimation,
 //!   disturbance rejection and initialisation from the first samples.
+//! - [`readings`]: the checked domain values sensors and estimators report
+//!   (built from wire messages by `nauta_messages::checked`).
 //! - [`strapdown`]: free strapdown inertial navigation on the WGS84 ellipsoid.
 //!
 //! Equations name the paper (`../shared/papers/`, by number) or the textbook
@@ -28,19 +36,24 @@
 
 pub mod alignment;
 pub mod attitude;
+pub mod attitude_core;
 pub mod calibration;
 pub mod earth;
 pub mod estimator;
 pub mod gyro;
+pub mod local;
 pub mod mekf;
 pub mod params;
 pub mod pf;
+pub mod readings;
+pub mod role;
 pub mod strapdown;
 
 pub use alignment::Alignment;
 pub use attitude::{AttitudeError, HeadingInclinationError};
-pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot};
+pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot, quat_to_wxyz};
 pub use gyro::{GyroIntegrator, GyroState};
 pub use mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
 pub use pf::{ParticleFilter, PfConfig, PfParams};
+pub use role::{Estimator, EstimatorError, Stamped};
 pub use strapdown::{Strapdown, StrapdownError, StrapdownState};

@@ -5,9 +5,14 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
+pub use nauta_estimation::readings::{
+    Ahrs, Attitude, BuoyRangeReading, Depth, Dvl, Fix, Gps, Imu, LblNav, LblReplyReading, Nav,
+    Propeller, Truth,
+};
+
 use crate::{
     AhrsSample, AttitudeEstimate, BuoyRange, DepthSample, DvlSample, GpsFix, ImuSample, LblReply,
-    PropellerSample, TruthState,
+    LblSolution, NavSolution, PositionFix, PropellerSample, TruthState,
 };
 
 /// Why a message was rejected.
@@ -198,21 +203,6 @@ pub mod limits {
 
 const PI: f64 = core::f64::consts::PI;
 
-/// A checked IMU sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Imu {
-    /// End of the integration interval, ns.
-    pub stamp_ns: u64,
-    /// Interval length, s.
-    pub interval_s: f64,
-    /// Angular rate, FRD, rad/s.
-    pub gyro_rad_s: Vector3<f64>,
-    /// Specific force, FRD, m/s².
-    pub accel_m_s2: Vector3<f64>,
-    /// Magnetic flux density, FRD, µT.
-    pub mag_ut: Vector3<f64>,
-}
-
 impl TryFrom<&ImuSample> for Imu {
     type Error = ValidationError;
     fn try_from(m: &ImuSample) -> Result<Self, Self::Error> {
@@ -225,15 +215,6 @@ impl TryFrom<&ImuSample> for Imu {
             mag_ut: vector(T, "mag_ut", m.mag_ut, limits::MAG_UT)?,
         })
     }
-}
-
-/// A checked depth sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Depth {
-    /// Stamp, ns.
-    pub stamp_ns: u64,
-    /// Depth, m, positive down.
-    pub depth_m: f64,
 }
 
 impl TryFrom<&DepthSample> for Depth {
@@ -250,21 +231,6 @@ impl TryFrom<&DepthSample> for Depth {
             )?,
         })
     }
-}
-
-/// A checked DVL sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Dvl {
-    /// Stamp, ns.
-    pub stamp_ns: u64,
-    /// Velocity over the bottom, FRD, m/s.
-    pub velocity_body_m_s: Vector3<f64>,
-    /// Altitude, m.
-    pub altitude_m: f64,
-    /// Bit i: beam i valid.
-    pub beams_valid: u8,
-    /// Bottom lock held.
-    pub bottom_lock: bool,
 }
 
 impl TryFrom<&DvlSample> for Dvl {
@@ -288,23 +254,6 @@ impl TryFrom<&DvlSample> for Dvl {
     }
 }
 
-/// A checked GPS fix.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Gps {
-    /// Stamp, ns.
-    pub stamp_ns: u64,
-    /// Latitude, rad.
-    pub lat_rad: f64,
-    /// Longitude, rad.
-    pub lon_rad: f64,
-    /// Ellipsoidal height, m.
-    pub height_m: f64,
-    /// Horizontal standard deviation, m.
-    pub horizontal_std_m: f64,
-    /// Fix quality code.
-    pub quality: u32,
-}
-
 impl TryFrom<&GpsFix> for Gps {
     type Error = ValidationError;
     fn try_from(m: &GpsFix) -> Result<Self, Self::Error> {
@@ -321,19 +270,6 @@ impl TryFrom<&GpsFix> for Gps {
     }
 }
 
-/// A checked vendor AHRS sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Ahrs {
-    /// Stamp, ns.
-    pub stamp_ns: u64,
-    /// Roll, rad, (-π, π].
-    pub roll_rad: f64,
-    /// Pitch, rad, [-π/2, π/2].
-    pub pitch_rad: f64,
-    /// Magnetic heading, rad, normalised to [0, 2π).
-    pub heading_mag_rad: f64,
-}
-
 impl TryFrom<&AhrsSample> for Ahrs {
     type Error = ValidationError;
     fn try_from(m: &AhrsSample) -> Result<Self, Self::Error> {
@@ -346,15 +282,6 @@ impl TryFrom<&AhrsSample> for Ahrs {
             heading_mag_rad: heading.rem_euclid(2.0 * PI),
         })
     }
-}
-
-/// A checked propeller sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Propeller {
-    /// Stamp, ns.
-    pub stamp_ns: u64,
-    /// Shaft speed, rad/s.
-    pub shaft_speed_rad_s: f64,
 }
 
 impl TryFrom<&PropellerSample> for Propeller {
@@ -371,23 +298,6 @@ impl TryFrom<&PropellerSample> for Propeller {
             )?,
         })
     }
-}
-
-/// A checked buoy range.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BuoyRangeReading {
-    /// Reception stamp, ns.
-    pub stamp_ns: u64,
-    /// Buoy latitude, rad.
-    pub buoy_lat_rad: f64,
-    /// Buoy longitude, rad.
-    pub buoy_lon_rad: f64,
-    /// Buoy transducer depth, m.
-    pub buoy_depth_m: f64,
-    /// One-way time of flight, s.
-    pub time_of_flight_s: f64,
-    /// Sound speed, m/s.
-    pub sound_speed_m_s: f64,
 }
 
 impl TryFrom<&BuoyRange> for BuoyRangeReading {
@@ -418,19 +328,6 @@ impl TryFrom<&BuoyRange> for BuoyRangeReading {
     }
 }
 
-/// A checked LBL reply.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LblReplyReading {
-    /// Reception stamp, ns.
-    pub stamp_ns: u64,
-    /// Transponder.
-    pub transponder_id: u32,
-    /// Interrogation stamp, ns.
-    pub interrogation_stamp_ns: u64,
-    /// Round-trip time, s.
-    pub round_trip_s: f64,
-}
-
 impl TryFrom<&LblReply> for LblReplyReading {
     type Error = ValidationError;
     fn try_from(m: &LblReply) -> Result<Self, Self::Error> {
@@ -456,23 +353,6 @@ impl TryFrom<&LblReply> for LblReplyReading {
     }
 }
 
-/// A checked true state.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Truth {
-    /// Stamp, ns.
-    pub stamp_ns: u64,
-    /// Latitude, rad.
-    pub lat_rad: f64,
-    /// Longitude, rad.
-    pub lon_rad: f64,
-    /// Depth, m.
-    pub depth_m: f64,
-    /// Velocity NED, m/s.
-    pub vel_ned_m_s: Vector3<f64>,
-    /// Attitude body → NED.
-    pub attitude: UnitQuaternion<f64>,
-}
-
 impl TryFrom<&TruthState> for Truth {
     type Error = ValidationError;
     fn try_from(m: &TruthState) -> Result<Self, Self::Error> {
@@ -494,19 +374,6 @@ impl TryFrom<&TruthState> for Truth {
     }
 }
 
-/// A checked attitude estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Attitude {
-    /// Stamp, ns.
-    pub stamp_ns: u64,
-    /// Attitude body → NED.
-    pub attitude: UnitQuaternion<f64>,
-    /// Error standard deviation about N, E, D, rad.
-    pub std_rad: Vector3<f64>,
-    /// Gyro bias, FRD, rad/s.
-    pub gyro_bias_rad_s: Vector3<f64>,
-}
-
 impl TryFrom<&AttitudeEstimate> for Attitude {
     type Error = ValidationError;
     fn try_from(m: &AttitudeEstimate) -> Result<Self, Self::Error> {
@@ -519,6 +386,112 @@ impl TryFrom<&AttitudeEstimate> for Attitude {
             attitude: quaternion(T, "quat_nb", m.quat_nb)?,
             std_rad: Vector3::from(m.std_rad),
             gyro_bias_rad_s: vector(T, "gyro_bias_rad_s", m.gyro_bias_rad_s, limits::GYRO_RAD_S)?,
+        })
+    }
+}
+
+/// Largest standard deviation an estimate may publish, m (or m/s): beyond it
+/// the estimate says nothing and is corrupt rather than uncertain.
+const STD_MAX: f64 = 1e7;
+
+impl TryFrom<&NavSolution> for Nav {
+    type Error = ValidationError;
+    fn try_from(m: &NavSolution) -> Result<Self, Self::Error> {
+        const T: &str = "NavSolution";
+        let attitude = if m.quat_nb == [0.0; 4] {
+            None
+        } else {
+            Some(quaternion(T, "quat_nb", m.quat_nb)?)
+        };
+        for s in m.pos_std_ned_m {
+            scalar(T, "pos_std_ned_m", s, 0.0, STD_MAX)?;
+        }
+        for s in m.vel_std_ned_m_s {
+            scalar(T, "vel_std_ned_m_s", s, 0.0, STD_MAX)?;
+        }
+        Ok(Nav {
+            stamp_ns: m.header.stamp_ns,
+            lat_rad: scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?,
+            lon_rad: scalar(T, "lon_rad", m.lon_rad, -PI, PI)?,
+            depth_m: scalar(
+                T,
+                "depth_m",
+                m.depth_m,
+                limits::DEPTH_MIN_M,
+                limits::DEPTH_MAX_M,
+            )?,
+            vel_ned_m_s: vector(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?,
+            attitude,
+            pos_std_ned_m: Vector3::from(m.pos_std_ned_m),
+            vel_std_ned_m_s: Vector3::from(m.vel_std_ned_m_s),
+            predicted_drift_m: scalar(T, "predicted_drift_m", m.predicted_drift_m, 0.0, STD_MAX)?,
+            aiding_mode: m.aiding_mode,
+        })
+    }
+}
+
+impl TryFrom<&PositionFix> for Fix {
+    type Error = ValidationError;
+    fn try_from(m: &PositionFix) -> Result<Self, Self::Error> {
+        const T: &str = "PositionFix";
+        Ok(Fix {
+            stamp_ns: m.header.stamp_ns,
+            lat_rad: scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?,
+            lon_rad: scalar(T, "lon_rad", m.lon_rad, -PI, PI)?,
+            std_north_m: scalar(T, "std_north_m", m.std_north_m, 0.0, STD_MAX)?,
+            std_east_m: scalar(T, "std_east_m", m.std_east_m, 0.0, STD_MAX)?,
+            corr_ne: scalar(T, "corr_ne", m.corr_ne, -1.0, 1.0)?,
+            effective_particles: scalar(T, "effective_particles", m.effective_particles, 0.0, 1e9)?,
+            source: m.fix_source,
+        })
+    }
+}
+
+impl TryFrom<&LblSolution> for LblNav {
+    type Error = ValidationError;
+    fn try_from(m: &LblSolution) -> Result<Self, Self::Error> {
+        const T: &str = "LblSolution";
+        // A local frame of at most the Earth's circumference.
+        const LOCAL_MAX_M: f64 = 4.1e7;
+        for row in m.p {
+            for v in row {
+                scalar(T, "p", v, -STD_MAX * STD_MAX, STD_MAX * STD_MAX)?;
+            }
+        }
+        for i in 0..4 {
+            scalar(T, "p", m.p[i][i], 0.0, STD_MAX * STD_MAX)?;
+        }
+        scalar(T, "accepted", f64::from(m.accepted), 0.0, 1.0)?;
+        Ok(LblNav {
+            stamp_ns: m.header.stamp_ns,
+            x_m: scalar(T, "x_m", m.x_m, -LOCAL_MAX_M, LOCAL_MAX_M)?,
+            y_m: scalar(T, "y_m", m.y_m, -LOCAL_MAX_M, LOCAL_MAX_M)?,
+            current_m_s: [
+                scalar(
+                    T,
+                    "current_x_m_s",
+                    m.current_x_m_s,
+                    -limits::SPEED_M_S,
+                    limits::SPEED_M_S,
+                )?,
+                scalar(
+                    T,
+                    "current_y_m_s",
+                    m.current_y_m_s,
+                    -limits::SPEED_M_S,
+                    limits::SPEED_M_S,
+                )?,
+            ],
+            p: m.p,
+            last_innovation_m: scalar(
+                T,
+                "last_innovation_m",
+                m.last_innovation_m,
+                -LOCAL_MAX_M,
+                LOCAL_MAX_M,
+            )?,
+            transponder_id: m.transponder_id,
+            accepted: m.accepted == 1,
         })
     }
 }

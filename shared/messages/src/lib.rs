@@ -16,6 +16,7 @@ mod macros;
 pub mod checked;
 pub mod codec;
 pub mod control;
+pub mod domain;
 pub mod estimates;
 pub mod header;
 pub mod registry;

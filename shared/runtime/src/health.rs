@@ -52,6 +52,15 @@ impl HealthReporter {
         }
     }
 
+    /// Counts an input the estimator refused (its state kept), logging the
+    /// first of each kind per service.
+    pub fn refuse(&mut self, service: &str, kind: &'static str, detail: &dyn std::fmt::Display) {
+        self.rejected += 1;
+        if self.logged.insert((service.to_owned(), kind)) {
+            tracing::warn!(service, kind, %detail, "input refused by the estimator (further ones of this kind are only counted)");
+        }
+    }
+
     /// Publishes the health message now.
     pub fn publish(&mut self, ctx: &Context) {
         let msg = Health {

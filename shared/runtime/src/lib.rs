@@ -2,7 +2,8 @@
 //! per-run namespace, one definition per service (its QoS), typed publishers and
 //! subscribers with sequence-gap counting and back-pressure deadlines, the event
 //! loop that ends cleanly on SIGINT/SIGTERM, the run clock, the ordered
-//! multi-input merge, health reporting and dead-node cleanup.
+//! multi-input merge, health reporting and dead-node cleanup, and the estimator
+//! shell ([`shell`]) that runs every role's estimator with all of that.
 //!
 //! Estimation code never depends on this crate; a service binary is a thin shell
 //! that wires [`Context`] ports to a pure estimator.
@@ -19,6 +20,7 @@ pub mod namespace;
 pub mod ports;
 pub mod process;
 pub mod services;
+pub mod shell;
 
 pub use clock::{ClockMode, Pacer};
 pub use context::Context;
@@ -32,6 +34,7 @@ pub use namespace::Namespace;
 pub use ports::{Connect, Inbox, Publisher, Subscriber};
 pub use process::ProcessArgs;
 pub use services::ServiceSpec;
+pub use shell::{Lifecycle, Shell};
 
 /// iceoryx2's inter-process service type, used everywhere.
 pub type Ipc = iceoryx2::service::ipc::Service;

@@ -20,6 +20,9 @@ struct Input<T> {
 #[derive(Debug)]
 pub struct OrderedMerge<T> {
     inputs: Vec<Input<T>>,
+    /// Each input's stamps strictly increase: after a message stamped `s`
+    /// nothing at `s` can follow, so the watermark becomes `s + 1`.
+    strict: bool,
 }
 
 /// A message pushed out of order on one input (its stamp is below that input's
@@ -46,6 +49,18 @@ impl<T> OrderedMerge<T> {
                     ended: false,
                 })
                 .collect(),
+            strict: false,
+        }
+    }
+
+    /// A merge over `n` inputs whose stamps strictly increase on each input
+    /// (the estimator shell refuses a repeated stamp before it gets here): a
+    /// message stamped `s` advances its input's watermark past `s`, so another
+    /// input's message at `s` is released without waiting for the next one.
+    pub fn strictly_increasing(n: usize) -> Self {
+        OrderedMerge {
+            strict: true,
+            ..Self::new(n)
         }
     }
 
@@ -61,7 +76,12 @@ impl<T> OrderedMerge<T> {
                 watermark_ns: w,
             });
         }
-        inp.watermark = Some(stamp_ns);
+        let mark = if self.strict {
+            stamp_ns.saturating_add(1)
+        } else {
+            stamp_ns
+        };
+        inp.watermark = Some(inp.watermark.map_or(mark, |w| w.max(mark)));
         inp.queue.push_back((stamp_ns, item));
         Ok(())
     }
@@ -86,6 +106,18 @@ impl<T> OrderedMerge<T> {
     /// True when every input has ended and every queue is empty.
     pub fn is_finished(&self) -> bool {
         self.inputs.iter().all(|i| i.ended && i.queue.is_empty())
+    }
+
+    /// The earliest stamp `input` can still deliver: the head of its queue,
+    /// else its watermark (`None` before it has one); `u64::MAX` once it has
+    /// ended and is drained.
+    pub fn next_bound(&self, input: usize) -> Option<u64> {
+        let inp = &self.inputs[input];
+        match inp.queue.front() {
+            Some((s, _)) => Some(*s),
+            None if inp.ended => Some(u64::MAX),
+            None => inp.watermark,
+        }
     }
 
     /// Messages queued in all inputs.

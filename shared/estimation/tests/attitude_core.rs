@@ -1,3 +1,4 @@
+// Integration test of the attitude role (it needs the simulator, which depends on this crate).
 //! Tests of the core: parameters, and accuracy of `gyro`, `mekf` and `pf` against the
 //! simulator's truth (`nauta_sim::scenario`), in-process.
 
@@ -7,7 +8,10 @@ use nauta_sim::mission::Origin;
 use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams};
 use nauta_sim::suite::SuiteConfig;
 
-use super::*;
+use nauta_estimation::attitude_core::*;
+use nauta_estimation::mekf::MekfParams;
+use nauta_estimation::pf::PfParams;
+use nauta_estimation::readings::Imu;
 
 const SEED: u64 = 7;
 

@@ -28,170 +28,26 @@
 //! calibrates the magnetometer before the filter), the alignment's mean field
 //! included; without one the samples are used as they come.
 
-use nalgebra::{Matrix3, Vector3};
-use serde::Deserialize;
+use nalgebra::Vector3;
 
-use nauta_estimation::alignment::Alignment;
-use nauta_estimation::calibration::MagCalibration;
-use nauta_estimation::earth::earth_rate_ned;
-use nauta_estimation::mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
-use nauta_estimation::pf::{ParticleFilter, PfConfig, PfParams};
-use nauta_estimation::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot, GyroIntegrator};
-use nauta_messages::checked::Imu;
+use crate::alignment::Alignment;
+use crate::calibration::MagCalibration;
+use crate::earth::earth_rate_ned;
+use crate::mekf::{MagneticReference, Mekf, MekfConfig};
+use crate::pf::{ParticleFilter, PfConfig};
+use crate::readings::Imu;
+use crate::role::{Estimator, EstimatorError, Stamped};
+use crate::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot, GyroIntegrator};
 
-#[cfg(test)]
-mod tests;
+mod params;
 
-/// The variants this binary implements; the first is the default.
+use params::check_alignment_fields;
+pub use params::{
+    GyroParams, MagnetometerParams, MekfVariantParams, PfVariantParams, VariantParams,
+};
+
+/// The variants of the attitude role; the first is the default.
 pub const VARIANTS: [&str; 3] = ["pf", "gyro", "mekf"];
-
-/// The magnetometer's calibration, `m = W (m̃ − h)` (C1 of
-/// `nauta_estimation::calibration::magnetometer`), in the parameters of every
-/// variant (`params.magnetometer = { hard_iron_ut = [..], soft_iron_inv = [[..], [..], [..]] }`);
-/// `nauta calibrate magnetometer` fits one. Default: none (h = 0, W = I).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct MagnetometerParams {
-    /// Hard iron `h`, µT, sensor frame.
-    pub hard_iron_ut: [f64; 3],
-    /// `W`, the inverse of the soft iron, by rows.
-    pub soft_iron_inv: [[f64; 3]; 3],
-}
-
-impl Default for MagnetometerParams {
-    fn default() -> Self {
-        Self {
-            hard_iron_ut: [0.0; 3],
-            soft_iron_inv: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        }
-    }
-}
-
-impl MagnetometerParams {
-    /// The checked calibration (finite, `W` invertible).
-    pub fn calibration(&self) -> anyhow::Result<MagCalibration> {
-        let w = Matrix3::from_fn(|r, c| self.soft_iron_inv[r][c]);
-        MagCalibration::new(Vector3::from(self.hard_iron_ut), w)
-            .map_err(|e| anyhow::anyhow!("magnetometer: {e}"))
-    }
-}
-
-/// Parameters of the `gyro` variant (`[process.attitude.variants.gyro]` over
-/// `[process.attitude.params]`).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct GyroParams {
-    /// Still samples averaged for the initial alignment (paper 000 averages 400 for
-    /// its static calibration; 200 is 2 s at 100 Hz).
-    pub alignment_samples: usize,
-    /// The magnetometer's calibration (the alignment's heading uses the field).
-    pub magnetometer: MagnetometerParams,
-}
-
-impl Default for GyroParams {
-    fn default() -> Self {
-        GyroParams {
-            alignment_samples: 200,
-            magnetometer: MagnetometerParams::default(),
-        }
-    }
-}
-
-/// Parameters of the `mekf` variant (`variants.mekf = { alignment_samples = 400,
-/// filter = { mag_norm_gate = 0.2 } }`).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct MekfVariantParams {
-    /// Samples averaged for the initial alignment (as the `gyro` variant).
-    pub alignment_samples: usize,
-    /// The alignment counts as still, and its mean gyro as the initial bias, when
-    /// the RMS of the gyro samples about their mean (norm over the three axes) is
-    /// below this, °/s. Default 1 (our choice: the MTi-30's white noise gives
-    /// 0.52 °/s at 100 Hz; a hand-rocked or wave-rocked IMU gives tens).
-    pub still_gyro_rms_deg_s: f64,
-    /// Initial roll and pitch 1σ, degrees, when the alignment was not still (its
-    /// means then average a moving attitude). Default 20 (our choice: the
-    /// amplitude of paper 000's rocking motion).
-    pub moving_alignment_tilt_std_deg: f64,
-    /// Initial heading 1σ, degrees, when the alignment was not still. Default 30
-    /// (our choice).
-    pub moving_alignment_heading_std_deg: f64,
-    /// The magnetometer's calibration.
-    pub magnetometer: MagnetometerParams,
-    /// The filter's parameters.
-    pub filter: MekfParams,
-}
-
-impl Default for MekfVariantParams {
-    fn default() -> Self {
-        Self {
-            alignment_samples: 200,
-            still_gyro_rms_deg_s: 1.0,
-            moving_alignment_tilt_std_deg: 20.0,
-            moving_alignment_heading_std_deg: 30.0,
-            magnetometer: MagnetometerParams::default(),
-            filter: MekfParams::default(),
-        }
-    }
-}
-
-/// Parameters of the `pf` variant (`variants.pf = { alignment_samples = 400,
-/// filter = { particles = 1000 } }`); the alignment fields as the `mekf`'s.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PfVariantParams {
-    /// Samples averaged for the initial alignment.
-    pub alignment_samples: usize,
-    /// The alignment counts as still, and its mean gyro as the initial bias
-    /// (paper 000's static calibration), when the RMS of the gyro samples
-    /// about their mean is below this, °/s. Default 1 (as the `mekf`).
-    pub still_gyro_rms_deg_s: f64,
-    /// Initial roll and pitch 1σ of the particles, degrees, when the alignment
-    /// was not still. Default 20 (as the `mekf`).
-    pub moving_alignment_tilt_std_deg: f64,
-    /// Initial heading 1σ, degrees, when the alignment was not still.
-    /// Default 30 (as the `mekf`).
-    pub moving_alignment_heading_std_deg: f64,
-    /// The magnetometer's calibration.
-    pub magnetometer: MagnetometerParams,
-    /// The filter's parameters.
-    pub filter: PfParams,
-}
-
-impl Default for PfVariantParams {
-    fn default() -> Self {
-        Self {
-            alignment_samples: 200,
-            still_gyro_rms_deg_s: 1.0,
-            moving_alignment_tilt_std_deg: 20.0,
-            moving_alignment_heading_std_deg: 30.0,
-            magnetometer: MagnetometerParams::default(),
-            filter: PfParams::default(),
-        }
-    }
-}
-
-/// A variant's parameters.
-#[derive(Debug, Clone)]
-pub enum VariantParams {
-    /// `gyro`.
-    Gyro(GyroParams),
-    /// `mekf`.
-    Mekf(MekfVariantParams),
-    /// `pf`.
-    Pf(PfVariantParams),
-}
-
-impl VariantParams {
-    /// The magnetometer's calibration parameters.
-    pub fn magnetometer(&self) -> &MagnetometerParams {
-        match self {
-            VariantParams::Gyro(p) => &p.magnetometer,
-            VariantParams::Mekf(p) => &p.magnetometer,
-            VariantParams::Pf(p) => &p.magnetometer,
-        }
-    }
-}
 
 /// The checked form of [`VariantParams`].
 #[derive(Debug, Clone, Copy)]
@@ -209,25 +65,6 @@ enum Variant {
         moving_tilt_std_rad: f64,
         moving_heading_std_rad: f64,
     },
-}
-
-/// Checks the alignment fields shared by `mekf` and `pf`.
-fn check_alignment_fields(
-    still_gyro_rms_deg_s: f64,
-    tilt_std_deg: f64,
-    heading_std_deg: f64,
-) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        still_gyro_rms_deg_s >= 0.0 && still_gyro_rms_deg_s.is_finite(),
-        "still_gyro_rms_deg_s = {still_gyro_rms_deg_s} is not a non-negative number"
-    );
-    for (name, v) in [
-        ("moving_alignment_tilt_std_deg", tilt_std_deg),
-        ("moving_alignment_heading_std_deg", heading_std_deg),
-    ] {
-        anyhow::ensure!(v > 0.0 && v <= 180.0, "{name} = {v} is not in (0, 180]");
-    }
-    Ok(())
 }
 
 /// Running mean and spread of the gyro during the alignment (Welford).
@@ -255,28 +92,28 @@ impl GyroMean {
     }
 }
 
-/// One running estimator.
+/// One running filter.
 #[derive(Debug)]
-enum Estimator {
+enum Filter {
     Gyro(GyroIntegrator),
     Mekf(Box<Mekf>),
     Pf(Box<ParticleFilter>),
 }
 
-impl Estimator {
+impl Filter {
     fn get(&self) -> &dyn AttitudeEstimator {
         match self {
-            Estimator::Gyro(g) => g,
-            Estimator::Mekf(m) => m.as_ref(),
-            Estimator::Pf(p) => p.as_ref(),
+            Filter::Gyro(g) => g,
+            Filter::Mekf(m) => m.as_ref(),
+            Filter::Pf(p) => p.as_ref(),
         }
     }
 
     fn get_mut(&mut self) -> &mut dyn AttitudeEstimator {
         match self {
-            Estimator::Gyro(g) => g,
-            Estimator::Mekf(m) => m.as_mut(),
-            Estimator::Pf(p) => p.as_mut(),
+            Filter::Gyro(g) => g,
+            Filter::Mekf(m) => m.as_mut(),
+            Filter::Pf(p) => p.as_mut(),
         }
     }
 }
@@ -288,7 +125,7 @@ enum Phase {
     /// Warm start: the estimator is built from this snapshot, valid after the
     /// sample stamped `.1`, at the first sample after it.
     Restoring(Box<AttitudeStateSnapshot>, u64),
-    Running(Estimator),
+    Running(Filter),
 }
 
 /// Alignment then one estimator variant.
@@ -312,23 +149,11 @@ impl AttitudeCore {
         let (alignment_samples, variant) = match params {
             VariantParams::Gyro(p) => (p.alignment_samples, Variant::Gyro),
             VariantParams::Mekf(p) => {
-                anyhow::ensure!(
-                    p.still_gyro_rms_deg_s >= 0.0 && p.still_gyro_rms_deg_s.is_finite(),
-                    "still_gyro_rms_deg_s = {} is not a non-negative number",
-                    p.still_gyro_rms_deg_s
-                );
-                for (name, v) in [
-                    (
-                        "moving_alignment_tilt_std_deg",
-                        p.moving_alignment_tilt_std_deg,
-                    ),
-                    (
-                        "moving_alignment_heading_std_deg",
-                        p.moving_alignment_heading_std_deg,
-                    ),
-                ] {
-                    anyhow::ensure!(v > 0.0 && v <= 180.0, "{name} = {v} is not in (0, 180]");
-                }
+                check_alignment_fields(
+                    p.still_gyro_rms_deg_s,
+                    p.moving_alignment_tilt_std_deg,
+                    p.moving_alignment_heading_std_deg,
+                )?;
                 (
                     p.alignment_samples,
                     Variant::Mekf {
@@ -478,15 +303,15 @@ fn restore(
     snapshot: &AttitudeStateSnapshot,
     stamp_ns: u64,
     first: &Imu,
-) -> anyhow::Result<Estimator> {
+) -> anyhow::Result<Filter> {
     let (q, _) = snapshot
         .checked()
         .map_err(|e| anyhow::anyhow!("snapshot refused: {e}"))?;
     let mut est = match variant {
-        Variant::Gyro => Estimator::Gyro(GyroIntegrator::new(q, latitude_rad, stamp_ns)?),
+        Variant::Gyro => Filter::Gyro(GyroIntegrator::new(q, latitude_rad, stamp_ns)?),
         Variant::Mekf { config, .. } => {
             let reference = MagneticReference::from_mean_field(&q, &first.mag_ut)?;
-            Estimator::Mekf(Box::new(Mekf::new(
+            Filter::Mekf(Box::new(Mekf::new(
                 &config,
                 q,
                 latitude_rad,
@@ -496,7 +321,7 @@ fn restore(
         }
         Variant::Pf { config, .. } => {
             let reference = MagneticReference::from_mean_field(&q, &first.mag_ut)?;
-            Estimator::Pf(Box::new(ParticleFilter::new(
+            Filter::Pf(Box::new(ParticleFilter::new(
                 &config,
                 q,
                 latitude_rad,
@@ -520,7 +345,7 @@ fn start(
     a: &Alignment,
     gyro: &GyroMean,
     stamp_ns: u64,
-) -> anyhow::Result<Estimator> {
+) -> anyhow::Result<Filter> {
     let q = a.finish()?;
     // The expected field (the `gyro` variant does not need one).
     let reference = || -> anyhow::Result<MagneticReference> {
@@ -531,7 +356,7 @@ fn start(
     };
     let earth_b = q.inverse_transform_vector(&earth_rate_ned(latitude_rad));
     match variant {
-        Variant::Gyro => Ok(Estimator::Gyro(GyroIntegrator::new(
+        Variant::Gyro => Ok(Filter::Gyro(GyroIntegrator::new(
             q,
             latitude_rad,
             stamp_ns,
@@ -563,7 +388,7 @@ fn start(
                 dip_deg = reference.dip_rad().to_degrees(),
                 "aligned; mekf starts"
             );
-            Ok(Estimator::Mekf(Box::new(mekf)))
+            Ok(Filter::Mekf(Box::new(mekf)))
         }
         Variant::Pf {
             config,
@@ -593,7 +418,7 @@ fn start(
                 dip_deg = reference.dip_rad().to_degrees(),
                 "aligned; pf starts"
             );
-            Ok(Estimator::Pf(Box::new(pf)))
+            Ok(Filter::Pf(Box::new(pf)))
         }
     }
 }
@@ -601,3 +426,56 @@ fn start(
 /// Smallest initial bias 1σ of the `pf` after a still alignment, rad/s
 /// (0.01 °/s): the particles keep some spread in bias.
 const PF_MIN_INITIAL_BIAS_STD_RAD_S: f64 = 1.745e-4;
+
+/// What the attitude role publishes for one IMU sample (`attitude/estimate`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AttitudeReport {
+    /// The IMU sample's stamp, ns.
+    pub stamp_ns: u64,
+    /// The estimate.
+    pub estimate: AttitudeOutput,
+    /// The initial alignment is done (always, once there is an estimate).
+    pub aligned: bool,
+    /// A magnetometer calibration other than none is applied.
+    pub magnetometer_calibrated: bool,
+}
+
+impl Stamped for AttitudeReport {
+    fn stamp_ns(&self) -> u64 {
+        self.stamp_ns
+    }
+}
+
+impl Estimator for AttitudeCore {
+    type Input = Imu;
+    type Output = AttitudeReport;
+    type Snapshot = AttitudeStateSnapshot;
+
+    fn on_input(&mut self, imu: &Imu, out: &mut Vec<AttitudeReport>) -> Result<(), EstimatorError> {
+        let estimate = self
+            .step(imu)
+            .map_err(|e| EstimatorError::new("attitude-step", format!("{e:#}")))?;
+        if let Some(estimate) = estimate {
+            out.push(AttitudeReport {
+                stamp_ns: imu.stamp_ns,
+                estimate,
+                aligned: self.is_aligned(),
+                magnetometer_calibrated: self.magnetometer_calibrated(),
+            });
+        }
+        Ok(())
+    }
+
+    fn snapshot(&self) -> Option<AttitudeStateSnapshot> {
+        AttitudeCore::snapshot(self)
+    }
+
+    fn restore(
+        &mut self,
+        snapshot: &AttitudeStateSnapshot,
+        stamp_ns: u64,
+    ) -> Result<(), EstimatorError> {
+        self.warm_start(*snapshot, stamp_ns)
+            .map_err(|e| EstimatorError::new("snapshot-refused", format!("{e:#}")))
+    }
+}
