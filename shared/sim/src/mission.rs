@@ -3,17 +3,15 @@
 //! scenarios (`survey`, `lbl`, `dr`).
 //!
 //! Waypoints are in a local north/east frame at an [`Origin`] (the mission's
-//! start point at the surface): `lat = L₀ + n / R_N(L₀)`,
-//! `lon = λ₀ + e / (R_E(L₀) cos L₀)`, the radii of curvature at the origin
-//! (paper 002 eq. 4 with the standard names, see [`nauta_estimation::earth`]).
-//! Over the few kilometres of these missions this flat mapping is what guidance needs;
-//! the truth itself is integrated on the ellipsoid.
+//! start point at the surface): the exact local tangent plane of
+//! [`nauta_estimation::local`], the one every tool of nauta uses to place a
+//! local position; the truth itself is integrated on the ellipsoid.
 //!
 //! Every waypoint mission starts at rest at the origin at the surface, dives
 //! towards the first waypoint's depth and, after the last waypoint, climbs to the
 //! surface and stops ([`crate::guidance`]).
 
-use nauta_estimation::earth::{meridian_radius, transverse_radius};
+use nauta_estimation::local::{self, LocalTangentPlane};
 
 /// The mission's local origin, rad.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,21 +36,23 @@ impl Origin {
         Self::from_degrees(38.6, -9.3)
     }
 
-    /// Local (north, east) of a geodetic position, m.
-    pub fn to_local(&self, lat_rad: f64, lon_rad: f64) -> (f64, f64) {
-        let dlon = nauta_estimation::attitude::wrap_pi(lon_rad - self.lon_rad);
-        (
-            (lat_rad - self.lat_rad) * meridian_radius(self.lat_rad),
-            dlon * transverse_radius(self.lat_rad) * self.lat_rad.cos(),
-        )
+    /// The exact local tangent plane at the origin (at the sea surface);
+    /// `None` when the origin is not a geodetic position (a latitude beyond
+    /// ±90°, a non-finite value).
+    pub fn plane(&self) -> Option<LocalTangentPlane> {
+        LocalTangentPlane::new(self.lat_rad, self.lon_rad, 0.0).ok()
     }
 
-    /// Geodetic (lat, lon) of a local (north, east), rad.
+    /// Local (north, east) of a geodetic position, m (the exact plane; NaN
+    /// from an origin that is not a position, which every check refuses).
+    pub fn to_local(&self, lat_rad: f64, lon_rad: f64) -> (f64, f64) {
+        local::north_east_of(self.lat_rad, self.lon_rad, lat_rad, lon_rad)
+    }
+
+    /// Geodetic (lat, lon) of a local (north, east), rad (the exact plane;
+    /// NaN as [`Origin::to_local`]).
     pub fn to_geodetic(&self, north_m: f64, east_m: f64) -> (f64, f64) {
-        (
-            self.lat_rad + north_m / meridian_radius(self.lat_rad),
-            self.lon_rad + east_m / (transverse_radius(self.lat_rad) * self.lat_rad.cos()),
-        )
+        local::geodetic_of(self.lat_rad, self.lon_rad, north_m, east_m)
     }
 }
 

@@ -15,16 +15,14 @@
 
 use std::collections::BTreeMap;
 
-use nauta_estimation::attitude::wrap_pi;
-use nauta_estimation::earth::{meridian_radius, transverse_radius};
+use nauta_estimation::local;
 use serde_json::Value;
 
 use super::{ExportOptions, UtcTime};
 
-/// A local origin: local north/east metres map to latitude/longitude with the
-/// radii of curvature at the origin (`lat = L₀ + n / R_N(L₀)`,
-/// `lon = λ₀ + e / (R_E(L₀) cos L₀)`, paper 002 eq. 4), the mapping the
-/// simulator's missions and the LBL navigator use.
+/// A local origin: local north/east metres map to latitude/longitude on the
+/// exact local tangent plane at the origin (`nauta_estimation::local`), the
+/// mapping the simulator's missions, eval and report use.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GeoOrigin {
     /// Geodetic latitude, rad.
@@ -52,21 +50,15 @@ impl GeoOrigin {
         })
     }
 
-    /// Geodetic (lat, lon) of a local (north, east), rad.
+    /// Geodetic (lat, lon) of a local (north, east), rad: the exact local
+    /// tangent plane of `nauta_estimation::local`, as every tool uses.
     pub fn to_geodetic(&self, north_m: f64, east_m: f64) -> (f64, f64) {
-        (
-            self.lat_rad + north_m / meridian_radius(self.lat_rad),
-            self.lon_rad + east_m / (transverse_radius(self.lat_rad) * self.lat_rad.cos()),
-        )
+        local::geodetic_of(self.lat_rad, self.lon_rad, north_m, east_m)
     }
 
     /// Local (north, east) of a geodetic position, m.
     pub fn to_local(&self, lat_rad: f64, lon_rad: f64) -> (f64, f64) {
-        let dlon = wrap_pi(lon_rad - self.lon_rad);
-        (
-            (lat_rad - self.lat_rad) * meridian_radius(self.lat_rad),
-            dlon * transverse_radius(self.lat_rad) * self.lat_rad.cos(),
-        )
+        local::north_east_of(self.lat_rad, self.lon_rad, lat_rad, lon_rad)
     }
 }
 
