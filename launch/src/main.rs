@@ -15,6 +15,7 @@ mod logcmd;
 mod monitor;
 mod pipeline;
 mod report;
+mod summary;
 mod supervisor;
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
@@ -28,7 +29,7 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run a pipeline from a manifest (e.g. `nauta launch launch/survey.toml --duration 60 --fast`).
-    Launch(launch::LaunchArgs),
+    Launch(launch::LaunchCommand),
     /// Validate a manifest without starting anything: schema and values, the
     /// binaries and their variants, the wiring (`nauta check launch/survey.toml`).
     Check(launch::LaunchArgs),
@@ -191,7 +192,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
-        Command::Launch(args) => launch::run(&args).map(ExitCode::from),
+        Command::Launch(cmd) => launch::launch(&cmd).map(ExitCode::from),
         Command::Check(args) => launch::check(&args).map(|()| ExitCode::SUCCESS),
         Command::Status { json, namespace } => {
             pipeline::status(json, namespace.as_deref()).map(|()| ExitCode::SUCCESS)

@@ -1,16 +1,19 @@
 //! The launcher's view of a run: a tap on every output service the processes
-//! describe (through the message registry, as the logger will do), message counts
-//! and rates, and the attitude error against the truth, for the summary line.
+//! describe (through the message registry, as the logger does), message counts,
+//! rates and sequence gaps, and what the run summary reports of the estimates:
+//! `nauta eval`'s errors and a digest per estimate stream.
 
 use std::any::Any;
+use std::collections::BTreeMap;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
-use nauta_estimation::AttitudeError;
-use nauta_messages::checked::{Attitude, Truth};
 use nauta_messages::registry::{MessageVisitor, visit_by_name};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
-use nauta_runtime::{Connect, Context, OrderedMerge, Subscriber, services};
+use nauta_runtime::{Connect, Context, Manifest, Subscriber, services};
+
+use crate::eval::{self, Data, Metrics, data::StreamKind};
 
 /// A type-erased subscriber.
 pub trait Tap {
@@ -124,25 +127,22 @@ pub fn tap(ctx: &Context, service: &str, type_name: &str) -> anyhow::Result<(Box
         .unwrap_or_else(|| anyhow::bail!("no tap made for {service}"))
 }
 
-enum Item {
-    Truth(Box<Truth>),
-    Attitude(Box<Attitude>),
-}
-
-/// Attitude error against the truth, matched by stamp, and a digest of every
-/// attitude output (equal digests: bit-identical outputs).
+/// What the launcher learns from the messages its taps receive: the truth and
+/// every estimate stream, kept as `nauta eval` reads them from a recording (so
+/// the summary's errors are eval's), a digest of each estimate stream, and
+/// each process's latest health.
+#[derive(Default)]
 pub struct Observer {
-    merge: OrderedMerge<Item>,
-    last_truth: Option<Truth>,
-    /// Estimates compared with a truth of the same stamp.
-    pub compared: u64,
-    sum_sq: [f64; 4],
-    max_total: f64,
-    digest: u64,
-    health: std::collections::BTreeMap<String, (u64, u64)>,
+    /// The truth and the estimate streams, checked as eval checks them.
+    data: Data,
+    /// FNV-1a (64 bit) of the encoding of every message of each estimate
+    /// stream, in the order received.
+    digests: BTreeMap<String, u64>,
+    /// The latest (dropped, rejected) of each (health service, instance).
+    health: BTreeMap<(String, u32), (u64, u64)>,
     /// Per health service: the previous and the latest message, with the
     /// time each arrived (rates for `nauta status`).
-    pub latest_health: std::collections::BTreeMap<String, HealthPair>,
+    pub latest_health: BTreeMap<String, HealthPair>,
 }
 
 /// A health message and when it arrived.
@@ -150,108 +150,73 @@ pub type TimedHealth = (Instant, Health);
 /// The previous (if any) and the latest health message of a process.
 pub type HealthPair = (Option<TimedHealth>, TimedHealth);
 
-const TRUTH: usize = 0;
-const ATTITUDE: usize = 1;
-
-impl Default for Observer {
-    fn default() -> Self {
-        Observer {
-            merge: OrderedMerge::new(2),
-            last_truth: None,
-            compared: 0,
-            sum_sq: [0.0; 4],
-            max_total: 0.0,
-            digest: 0xcbf2_9ce4_8422_2325,
-            health: Default::default(),
-            latest_health: Default::default(),
-        }
-    }
-}
+/// FNV-1a's offset basis (64 bit).
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+/// FNV-1a's prime (64 bit).
+const FNV_PRIME: u64 = 0x0100_0000_01b3;
 
 impl Observer {
-    fn observe(&mut self, service: &str, msg: &dyn Any) {
-        if let Some(t) = msg.downcast_ref::<TruthState>()
-            && let Ok(t) = Truth::try_from(t)
-        {
-            let _ = self.merge.push(TRUTH, t.stamp_ns, Item::Truth(Box::new(t)));
-        } else if let Some(a) = msg.downcast_ref::<AttitudeEstimate>() {
-            if let Ok(bytes) = codec::encode(a) {
-                for b in bytes {
-                    // FNV-1a, 64 bit.
-                    self.digest = (self.digest ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+    fn observe<M: Message>(&mut self, service: &str, msg: &M) {
+        let estimate = StreamKind::of(M::TYPE_NAME).is_some();
+        if estimate || service == TRUTH_SERVICE {
+            match codec::encode(msg) {
+                Ok(bytes) => {
+                    if estimate {
+                        let d = self.digests.entry(service.to_owned()).or_insert(FNV_OFFSET);
+                        for b in &bytes {
+                            *d = (*d ^ u64::from(*b)).wrapping_mul(FNV_PRIME);
+                        }
+                    }
+                    self.data.take(service, M::TYPE_NAME, &bytes);
                 }
+                Err(e) => tracing::warn!(%service, error = %e, "message not evaluated"),
             }
-            if let Ok(checked) = Attitude::try_from(a) {
-                let _ = self.merge.push(
-                    ATTITUDE,
-                    checked.stamp_ns,
-                    Item::Attitude(Box::new(checked)),
-                );
-            }
-        } else if let Some(h) = msg.downcast_ref::<Health>() {
-            self.health
-                .insert(service.to_owned(), (h.dropped, h.rejected));
+        } else if let Some(h) = (msg as &dyn Any).downcast_ref::<Health>() {
+            self.health.insert(
+                (service.to_owned(), h.header.instance),
+                (h.dropped, h.rejected),
+            );
             let now = Instant::now();
             let prev = self.latest_health.remove(service).map(|(_, last)| last);
             self.latest_health
                 .insert(service.to_owned(), (prev, (now, *h)));
-        } else if let Some(p) = msg.downcast_ref::<Progress>()
-            && p.header.is_end_of_stream()
-        {
-            if service == progress_service(Role::Sensor.name()) {
-                self.merge.end(TRUTH);
-            } else if service == progress_service(Role::Attitude.name()) {
-                self.merge.end(ATTITUDE);
-            }
         }
-        self.settle();
     }
 
-    fn settle(&mut self) {
-        while let Some((_, stamp, item)) = self.merge.pop() {
-            match item {
-                Item::Truth(t) => self.last_truth = Some(*t),
-                Item::Attitude(a) => {
-                    if let Some(t) = self.last_truth.as_ref().filter(|t| t.stamp_ns == stamp) {
-                        let e = AttitudeError::between(&a.attitude, &t.attitude);
-                        for (s, v) in self.sum_sq.iter_mut().zip([
-                            e.roll_rad,
-                            e.pitch_rad,
-                            e.yaw_rad,
-                            e.total_rad,
-                        ]) {
-                            *s += v * v;
-                        }
-                        self.max_total = self.max_total.max(e.total_rad);
-                        self.compared += 1;
-                    }
+    /// `nauta eval`'s metrics of every estimate stream received, against the
+    /// truth received (the local frame of `lbl/nav` from `manifest`'s site);
+    /// empty when the run had no estimate or no truth.
+    pub fn errors(&mut self, manifest: &Manifest) -> BTreeMap<String, Metrics> {
+        let data = &mut self.data;
+        data.run = eval::live::run_info(manifest);
+        eval::live::sort(data);
+        match eval::evaluate(Path::new("the run"), data) {
+            Ok(e) => {
+                for (topic, why) in &e.skipped {
+                    tracing::warn!(%topic, "not evaluated: {why}");
                 }
+                e.streams
+            }
+            Err(e) => {
+                tracing::debug!("no estimate errors: {e:#}");
+                BTreeMap::new()
             }
         }
     }
 
-    /// RMS roll, pitch, yaw and total attitude error, degrees.
-    pub fn rms_deg(&self) -> Option<[f64; 4]> {
-        (self.compared > 0).then(|| {
-            self.sum_sq
-                .map(|s| (s / self.compared as f64).sqrt().to_degrees())
-        })
+    /// The digest of each estimate stream (hex), equal for equal outputs.
+    pub fn digests(&self) -> BTreeMap<String, String> {
+        self.digests
+            .iter()
+            .map(|(t, d)| (t.clone(), format!("{d:016x}")))
+            .collect()
     }
 
-    /// Largest total attitude error, degrees.
-    pub fn max_total_deg(&self) -> f64 {
-        self.max_total.to_degrees()
-    }
-
-    /// Messages lost and rejected inside the processes, from their last health.
+    /// Messages lost and rejected inside the processes: the sum over every
+    /// instance (a restarted one counts from zero) of its last health.
     pub fn process_losses(&self) -> (u64, u64) {
         self.health
             .values()
             .fold((0, 0), |(l, r), (dl, dr)| (l + dl, r + dr))
-    }
-
-    /// FNV-1a digest of every attitude estimate's encoding, in order.
-    pub fn digest(&self) -> u64 {
-        self.digest
     }
 }
