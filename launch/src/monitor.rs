@@ -13,7 +13,7 @@ use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
 use nauta_runtime::{Connect, Context, Manifest, Subscriber, services};
 
-use crate::eval::{self, Data, Metrics, data::StreamKind};
+use crate::eval::{self, Data, Evaluation, data::StreamKind};
 
 /// A type-erased subscriber.
 pub trait Tap {
@@ -183,10 +183,10 @@ impl Observer {
         }
     }
 
-    /// `nauta eval`'s metrics of every estimate stream received, against the
-    /// truth received (the local frame of `lbl/nav` from `manifest`'s site);
-    /// empty when the run had no estimate or no truth.
-    pub fn errors(&mut self, manifest: &Manifest) -> BTreeMap<String, Metrics> {
+    /// `nauta eval`'s evaluation of every estimate stream received, against
+    /// the truth received (the local frame of `lbl/nav` from `manifest`'s
+    /// site); `None` when the run had no estimate or no truth.
+    pub fn evaluate(&mut self, manifest: &Manifest) -> Option<Evaluation> {
         let data = &mut self.data;
         data.run = eval::live::run_info(manifest);
         eval::live::sort(data);
@@ -195,11 +195,11 @@ impl Observer {
                 for (topic, why) in &e.skipped {
                     tracing::warn!(%topic, "not evaluated: {why}");
                 }
-                e.streams
+                Some(e)
             }
             Err(e) => {
                 tracing::debug!("no estimate errors: {e:#}");
-                BTreeMap::new()
+                None
             }
         }
     }

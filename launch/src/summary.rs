@@ -9,7 +9,7 @@ use nauta_messages::{ATTITUDE_ESTIMATE_SERVICE, IMU_SERVICE, TRUTH_SERVICE};
 use nauta_runtime::{LoopExit, Manifest, Namespace};
 use serde::Serialize;
 
-use crate::eval::Metrics;
+use crate::eval::{ErrorSample, Evaluation, Metrics};
 use crate::monitor::{Observer, Tap};
 use crate::supervisor::Supervisor;
 
@@ -45,7 +45,7 @@ pub struct RunSummary {
     /// received it.
     pub sensor_span: Option<SensorSpan>,
     /// Per estimate stream: `nauta eval`'s metrics against the truth.
-    pub errors: BTreeMap<String, Metrics>,
+    pub errors: BTreeMap<String, StreamErrors>,
     /// Per estimate stream: a digest of its outputs (FNV-1a of every
     /// message's encoding, in order), equal for equal outputs.
     pub digests: BTreeMap<String, String>,
@@ -66,6 +66,52 @@ pub struct RunSummary {
     pub failures: Vec<String>,
     /// The launcher's exit code: 0, 1 when failed, 130 when stopped by a signal.
     pub exit_code: u8,
+}
+
+/// The errors of one estimate stream: `nauta eval`'s keys, and for an
+/// attitude the total rotation angle of the same per-sample errors.
+#[derive(Debug, Clone, Serialize)]
+pub struct StreamErrors {
+    /// `nauta eval`'s metrics.
+    #[serde(flatten)]
+    pub eval: Metrics,
+    /// RMS of the total attitude error angle, deg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub total_rms_deg: Option<f64>,
+    /// Largest total attitude error angle, deg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub total_max_deg: Option<f64>,
+}
+
+impl StreamErrors {
+    fn new(eval: Metrics, series: &[ErrorSample]) -> Self {
+        let totals: Vec<f64> = series
+            .iter()
+            .filter_map(|e| Some(e.attitude?.total_rad.to_degrees()))
+            .collect();
+        let n = totals.len() as f64;
+        StreamErrors {
+            eval,
+            total_rms_deg: (!totals.is_empty())
+                .then(|| (totals.iter().map(|t| t * t).sum::<f64>() / n).sqrt()),
+            total_max_deg: totals.iter().copied().reduce(f64::max),
+        }
+    }
+}
+
+/// Errors per estimate stream of an evaluation.
+fn errors(eval: Option<Evaluation>) -> BTreeMap<String, StreamErrors> {
+    let Some(mut eval) = eval else {
+        return BTreeMap::new();
+    };
+    eval.streams
+        .into_iter()
+        .map(|(topic, m)| {
+            let series = eval.series.remove(&topic).unwrap_or_default();
+            let e = StreamErrors::new(m, &series);
+            (topic, e)
+        })
+        .collect()
 }
 
 /// Messages of one service.
@@ -212,7 +258,7 @@ impl RunSummary {
             rejected,
             streams,
             sensor_span,
-            errors: obs.errors(manifest),
+            errors: errors(obs.evaluate(manifest)),
             digests: obs.digests(),
             restarts: per_member(|m| m.restarts),
             swaps: per_member(|m| m.swaps),
@@ -299,10 +345,14 @@ impl RunSummary {
 
 /// `NAME error rms ...` of one stream: what it has of attitude, horizontal
 /// position and depth.
-fn error_part(name: &str, m: &Metrics) -> String {
+fn error_part(name: &str, e: &StreamErrors) -> String {
+    let m = &e.eval;
     let mut what = Vec::new();
     if let (Some(r), Some(p), Some(y)) = (m.roll_rms_deg, m.pitch_rms_deg, m.yaw_rms_deg) {
         what.push(format!("roll {r:.3}° pitch {p:.3}° yaw {y:.3}°"));
+    }
+    if let (Some(t), Some(max)) = (e.total_rms_deg, e.total_max_deg) {
+        what.push(format!("total {t:.3}° max {max:.3}°"));
     }
     if let Some(h) = m.horizontal_rms_m {
         what.push(format!("horizontal {h:.3} m"));

@@ -1,5 +1,5 @@
 //! Helpers of nauta's end-to-end tests: locating (and building once) the
-//! workspace binaries, running `nauta launch`, parsing its summary line, a
+//! workspace binaries, running `nauta launch --json`, reading its summary, a
 //! watchdog that bounds every test, and the namespace's shared-memory files.
 //!
 //! The tests themselves are in `tests/e2e.rs`.
@@ -329,10 +329,10 @@ impl Finished {
         self.status.code()
     }
 
-    /// The summary line of `nauta launch`.
+    /// The run summary of `nauta launch --json` (every launch helper here
+    /// passes `--json`).
     pub fn summary(&self) -> Summary {
-        Summary::find(&self.stdout)
-            .unwrap_or_else(|| panic!("no summary line in the output\n{self}"))
+        Summary::parse(&self.stdout).unwrap_or_else(|e| panic!("{e}\n{self}"))
     }
 }
 
@@ -475,103 +475,200 @@ impl Drop for Running {
     }
 }
 
-/// Starts `nauta launch <survey.toml> <args>`, sharing the launch gate.
+/// `launch MANIFEST --json ARGS`: the arguments of every launch the tests run.
+fn launch_args(manifest: &Path, args: &[&str]) -> Vec<String> {
+    [
+        "launch".to_owned(),
+        manifest.display().to_string(),
+        "--json".to_owned(),
+    ]
+    .into_iter()
+    .chain(args.iter().map(|s| s.to_string()))
+    .collect()
+}
+
+/// Starts `nauta launch <survey.toml> --json <args>`, sharing the launch gate.
 pub fn start_launch(wd: &Watchdog, args: &[&str]) -> Running {
     start_launch_with(wd, args, Some(Gate::share()))
 }
 
-/// Starts `nauta launch <survey.toml> <args>` with an explicit gate share
-/// (`None` for a test that holds the gate closed).
+/// Starts `nauta launch <survey.toml> --json <args>` with an explicit gate
+/// share (`None` for a test that holds the gate closed).
 pub fn start_launch_with(wd: &Watchdog, args: &[&str], gate: Option<Shared>) -> Running {
-    let manifest = survey_manifest();
-    let mut all: Vec<String> = vec!["launch".into(), manifest.display().to_string()];
-    all.extend(args.iter().map(|s| s.to_string()));
-    Running::spawn(wd, &bin("nauta"), &all, gate)
+    Running::spawn(
+        wd,
+        &bin("nauta"),
+        &launch_args(&survey_manifest(), args),
+        gate,
+    )
 }
 
-/// Runs `nauta launch <survey.toml> <args>` to its end.
+/// Runs `nauta launch <survey.toml> --json <args>` to its end.
 pub fn launch(wd: &Watchdog, args: &[&str]) -> Finished {
     start_launch(wd, args).wait(wd)
 }
 
-/// Runs `nauta launch <manifest> <args>` to its end, sharing the launch gate.
+/// Starts `nauta launch <manifest> --json <args>`, sharing the launch gate.
+pub fn start_launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> Running {
+    Running::spawn(
+        wd,
+        &bin("nauta"),
+        &launch_args(manifest, args),
+        Some(Gate::share()),
+    )
+}
+
+/// Runs `nauta launch <manifest> --json <args>` to its end, sharing the launch gate.
 pub fn launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> Finished {
-    let mut all: Vec<String> = vec!["launch".into(), manifest.display().to_string()];
-    all.extend(args.iter().map(|s| s.to_string()));
-    Running::spawn(wd, &bin("nauta"), &all, Some(Gate::share())).wait(wd)
+    start_launch_manifest(wd, manifest, args).wait(wd)
 }
 
 // ---------------------------------------------------------------------------
-// Summary line
+// Run summary
 // ---------------------------------------------------------------------------
 
-/// The summary line `nauta launch` prints on stdout.
+/// The run summary `nauta launch --json` prints on stdout: one JSON object
+/// (keys in the README, "The run summary").
 #[derive(Debug, Clone)]
 pub struct Summary {
-    /// The line.
-    pub line: String,
+    /// The object.
+    pub json: serde_json::Value,
+}
+
+impl std::fmt::Display for Summary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:#}", self.json)
+    }
 }
 
 impl Summary {
-    /// Finds the summary line in `stdout`.
-    pub fn find(stdout: &str) -> Option<Self> {
-        stdout
-            .lines()
-            .rev()
-            .find(|l| l.starts_with("nauta: run ") && l.contains(" | "))
-            .map(|l| Summary { line: l.to_owned() })
+    /// Parses `stdout`, which must be exactly one JSON object.
+    pub fn parse(stdout: &str) -> Result<Self, String> {
+        match serde_json::from_str::<serde_json::Value>(stdout.trim()) {
+            Ok(json) if json.is_object() => Ok(Summary { json }),
+            Ok(other) => Err(format!("the summary is not a JSON object: {other}")),
+            Err(e) => Err(format!("stdout is not one JSON object: {e}")),
+        }
     }
 
-    fn parts(&self) -> impl Iterator<Item = &str> {
-        self.line.split(" | ").map(str::trim)
+    fn u64_at(&self, pointer: &str) -> Option<u64> {
+        self.json.pointer(pointer)?.as_u64()
     }
 
-    /// The namespace of the run (`nauta: run NS ...`).
+    fn f64_at(&self, pointer: &str) -> Option<f64> {
+        self.json.pointer(pointer)?.as_f64()
+    }
+
+    fn str_at(&self, pointer: &str) -> Option<&str> {
+        self.json.pointer(pointer)?.as_str()
+    }
+
+    /// The namespace of the run.
     pub fn namespace(&self) -> Option<&str> {
-        self.line.strip_prefix("nauta: run ")?.split(' ').next()
+        self.str_at("/namespace")
     }
 
-    /// Messages received on `service` (`SERVICE N msgs ...`).
+    /// Messages received on `service` (`streams.SERVICE.messages`).
     pub fn count(&self, service: &str) -> Option<u64> {
-        self.parts().find_map(|p| {
-            let mut w = p.strip_prefix(service)?.strip_prefix(' ')?.split(' ');
-            let n = w.next()?.parse().ok()?;
-            (w.next()? == "msgs").then_some(n)
-        })
+        self.json
+            .get("streams")?
+            .get(service)?
+            .get("messages")?
+            .as_u64()
     }
 
-    /// Sequence gaps (`gaps N`).
+    /// Mean rate of `service`, Hz.
+    pub fn rate_hz(&self, service: &str) -> Option<f64> {
+        self.json
+            .get("streams")?
+            .get(service)?
+            .get("rate_hz")?
+            .as_f64()
+    }
+
+    /// Messages on every data service.
+    pub fn messages(&self) -> Option<u64> {
+        self.u64_at("/messages")
+    }
+
+    /// Sequence gaps seen by the launcher's taps.
     pub fn gaps(&self) -> Option<u64> {
-        self.parts()
-            .find_map(|p| p.strip_prefix("gaps ")?.trim().parse().ok())
+        self.u64_at("/gaps")
     }
 
-    /// The sensor stream's span (`SERVICE span S s simulated in W s wall`):
-    /// (service, simulated seconds, wall seconds) from its first to its last sample.
+    /// Messages lost inside the processes.
+    pub fn lost(&self) -> Option<u64> {
+        self.u64_at("/lost")
+    }
+
+    /// Inputs refused by their checks.
+    pub fn rejected(&self) -> Option<u64> {
+        self.u64_at("/rejected")
+    }
+
+    /// The sensor stream's span: (service, simulated seconds, wall seconds)
+    /// from its first to its last sample.
     pub fn sensor_span(&self) -> Option<(String, f64, f64)> {
-        self.parts().find_map(|p| {
-            let (service, rest) = p.split_once(" span ")?;
-            let mut w = rest.split(' ');
-            let sim = w.next()?.parse().ok()?;
-            let wall = w.nth(3)?.parse().ok()?;
-            Some((service.to_owned(), sim, wall))
-        })
+        Some((
+            self.str_at("/sensor_span/topic")?.to_owned(),
+            self.f64_at("/sensor_span/simulated_s")?,
+            self.f64_at("/sensor_span/wall_s")?,
+        ))
     }
 
-    /// Simulated seconds of the run (`... sim 60.0 s mission ...`).
+    /// Simulated seconds of the run.
     pub fn mission_s(&self) -> Option<f64> {
-        let head = self.parts().next()?;
-        let w: Vec<&str> = head.split(' ').collect();
-        let i = w.iter().position(|x| *x == "mission")?;
-        w.get(i.checked_sub(2)?)?.parse().ok()
+        self.f64_at("/mission_s")
     }
 
-    /// Attitude digest (`attitude digest HEX`).
+    /// The digest of `attitude/estimate`.
     pub fn digest(&self) -> Option<String> {
-        self.parts().find_map(|p| {
-            let d = p.strip_prefix("attitude digest ")?.trim();
-            (!d.is_empty() && d.chars().all(|c| c.is_ascii_hexdigit())).then(|| d.to_owned())
-        })
+        self.digest_of("attitude/estimate")
+    }
+
+    /// The digest of estimate stream `topic` (hex).
+    pub fn digest_of(&self, topic: &str) -> Option<String> {
+        let d = self.json.get("digests")?.get(topic)?.as_str()?;
+        (!d.is_empty() && d.chars().all(|c| c.is_ascii_hexdigit())).then(|| d.to_owned())
+    }
+
+    /// `nauta eval`'s `key` of estimate stream `topic` (`errors.TOPIC.KEY`).
+    pub fn error(&self, topic: &str, key: &str) -> Option<f64> {
+        self.json.get("errors")?.get(topic)?.get(key)?.as_f64()
+    }
+
+    /// Restarts of `process` (0 when it has none).
+    pub fn restarts(&self, process: &str) -> u64 {
+        self.per_process("restarts", process)
+    }
+
+    /// Swaps of `process` (0 when it has none).
+    pub fn swaps(&self, process: &str) -> u64 {
+        self.per_process("swaps", process)
+    }
+
+    /// `KEY.PROCESS` of a per-process count (absent: 0).
+    fn per_process(&self, key: &str, process: &str) -> u64 {
+        self.json
+            .get(key)
+            .and_then(|r| r.get(process))
+            .and_then(serde_json::Value::as_u64)
+            .unwrap_or(0)
+    }
+
+    /// True when every process exited 0 (`exit` is `ok`).
+    pub fn all_exited_0(&self) -> bool {
+        self.str_at("/exit") == Some("ok")
+    }
+
+    /// How the run ended: `end`, `signal` or `request`.
+    pub fn stopped(&self) -> Option<&str> {
+        self.str_at("/stopped")
+    }
+
+    /// The first failure, when the run failed.
+    pub fn failure(&self) -> Option<&str> {
+        self.str_at("/failure")
     }
 }
 
@@ -648,25 +745,6 @@ impl EventWatch {
             std::thread::sleep(Duration::from_millis(5));
         }
     }
-}
-
-/// `s` without ANSI escape sequences (tracing colours its output).
-pub fn strip_ansi(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    let mut chars = s.chars();
-    while let Some(c) = chars.next() {
-        if c == '\u{1b}' {
-            // CSI: ESC [ ... final byte in @..~
-            for d in chars.by_ref() {
-                if ('@'..='~').contains(&d) && d != '[' {
-                    break;
-                }
-            }
-        } else {
-            out.push(c);
-        }
-    }
-    out
 }
 
 // ---------------------------------------------------------------------------
