@@ -220,3 +220,134 @@ impl Observer {
             .fold((0, 0), |(l, r), (dl, dr)| (l + dl, r + dr))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nauta_estimation::earth::{meridian_radius, transverse_radius};
+
+    const DEPTH_M: f64 = 10.0;
+
+    fn survey() -> Manifest {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("survey.toml");
+        Manifest::load(&path).expect("launch/survey.toml loads")
+    }
+
+    /// 100 truth samples at the survey's origin, at rest, and for each stamp
+    /// one message of every estimate type, each off by a known error: yaw
+    /// +0.01 rad, `ains/nav` 1 m north, `positioning/fix` 2 m east, `lbl/nav`
+    /// 3 m north in the local frame of the manifest's site.
+    fn observe_run(obs: &mut Observer, site: &nauta_runtime::manifest::Site, yaw: f64) {
+        let (lat, lon) = (
+            site.latitude_deg.to_radians(),
+            site.longitude_deg.to_radians(),
+        );
+        let h = -DEPTH_M;
+        for i in 1..=100u64 {
+            let stamp = i * 10_000_000;
+            let header = |role| Header::new(stamp, i - 1, role, 0);
+            let truth = TruthState {
+                header: header(Role::Sensor),
+                lat_rad: lat,
+                lon_rad: lon,
+                depth_m: DEPTH_M,
+                quat_nb: [1.0, 0.0, 0.0, 0.0],
+                ..Default::default()
+            };
+            obs.observe(TRUTH_SERVICE, &truth);
+            let att = AttitudeEstimate {
+                header: header(Role::Attitude),
+                quat_nb: [(yaw / 2.0).cos(), 0.0, 0.0, (yaw / 2.0).sin()],
+                ..Default::default()
+            };
+            obs.observe(ATTITUDE_ESTIMATE_SERVICE, &att);
+            let nav = NavSolution {
+                header: header(Role::Ains),
+                lat_rad: lat + 1.0 / (meridian_radius(lat) + h),
+                lon_rad: lon,
+                depth_m: DEPTH_M,
+                ..Default::default()
+            };
+            obs.observe(NAV_SOLUTION_SERVICE, &nav);
+            let fix = PositionFix {
+                header: header(Role::Positioning),
+                lat_rad: lat,
+                lon_rad: lon + 2.0 / ((transverse_radius(lat) + h) * lat.cos()),
+                ..Default::default()
+            };
+            obs.observe(POSITION_FIX_SERVICE, &fix);
+            let lbl = LblSolution {
+                header: header(Role::Lbl),
+                x_m: 3.0,
+                ..Default::default()
+            };
+            obs.observe(LBL_SOLUTION_SERVICE, &lbl);
+        }
+    }
+
+    #[test]
+    fn every_estimate_stream_is_evaluated_and_digested() {
+        let manifest = survey();
+        let site = manifest.site.expect("the survey has a site");
+        let mut obs = Observer::default();
+        observe_run(&mut obs, &site, 0.01);
+        let eval = obs.evaluate(&manifest).expect("an evaluation");
+        assert!(eval.skipped.is_empty(), "{:?}", eval.skipped);
+        let horizontal = |topic: &str| {
+            let m = &eval.streams[topic];
+            assert_eq!(
+                (m.samples, m.unmatched, m.rejected),
+                (100, 0, 0),
+                "{topic}: {m:?}"
+            );
+            m.horizontal_rms_m.expect("horizontal error")
+        };
+        assert!((horizontal(NAV_SOLUTION_SERVICE) - 1.0).abs() < 1e-3);
+        assert!((horizontal(POSITION_FIX_SERVICE) - 2.0).abs() < 1e-3);
+        assert!((horizontal(LBL_SOLUTION_SERVICE) - 3.0).abs() < 1e-3);
+        let att = &eval.streams[ATTITUDE_ESTIMATE_SERVICE];
+        assert_eq!(att.samples, 100);
+        let yaw = att.yaw_rms_deg.expect("yaw");
+        assert!((yaw - 0.01f64.to_degrees()).abs() < 1e-9, "{yaw}");
+
+        // Equal outputs, equal digests; one stream changed, only its digest.
+        let digests = obs.digests();
+        assert_eq!(digests.len(), 4, "{digests:?}");
+        let mut same = Observer::default();
+        observe_run(&mut same, &site, 0.01);
+        assert_eq!(same.digests(), digests);
+        let mut other = Observer::default();
+        observe_run(&mut other, &site, 0.02);
+        let changed: Vec<&String> = digests
+            .keys()
+            .filter(|t| other.digests()[*t] != digests[*t])
+            .collect();
+        assert_eq!(changed, [ATTITUDE_ESTIMATE_SERVICE]);
+    }
+
+    #[test]
+    fn the_attitude_digest_is_fnv_1a_of_the_encodings() {
+        let mut obs = Observer::default();
+        let est = AttitudeEstimate {
+            header: Header::new(10_000_000, 0, Role::Attitude, 0),
+            quat_nb: [1.0, 0.0, 0.0, 0.0],
+            ..Default::default()
+        };
+        obs.observe(ATTITUDE_ESTIMATE_SERVICE, &est);
+        obs.observe(ATTITUDE_ESTIMATE_SERVICE, &est);
+        // FNV-1a as published (http://www.isthe.com/chongo/tech/comp/fnv/):
+        // the empty input hashes to the offset basis, "a" to af63dc4c8601ec8c.
+        let fnv = |bytes: &[u8]| {
+            bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+                (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+            })
+        };
+        assert_eq!(fnv(b"a"), 0xaf63_dc4c_8601_ec8c);
+        let bytes = codec::encode(&est).expect("encodes");
+        let twice = [bytes.clone(), bytes].concat();
+        assert_eq!(
+            obs.digests()[ATTITUDE_ESTIMATE_SERVICE],
+            format!("{:016x}", fnv(&twice))
+        );
+    }
+}
