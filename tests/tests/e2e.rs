@@ -216,6 +216,9 @@ fn stop_by_signal_leaves_no_shared_memory(signal: i32, name: &str) {
         Some(130),
         "nauta launch stopped by {name} should exit 130\n{out}"
     );
+    let s = out.summary();
+    assert_eq!(s.stopped(), Some("signal"), "{s}");
+    assert_eq!(s.json["exit_code"], 130, "{s}");
 
     // Processes may finish removing their files just after they exit.
     let gone = wait_until(&wd, Duration::from_secs(10), || ns.shm_files().is_empty());
