@@ -325,3 +325,49 @@ fn scenario_parameters_are_overridable_from_the_command_line() {
         "the error does not name the key\n{bad}"
     );
 }
+
+/// `nauta bench pacing` runs paced launches and reports each one's wall span
+/// beside the expected one; the figures themselves are BENCHMARKS.md's (a
+/// test asserts no wall-clock bound).
+#[test]
+fn bench_pacing_reports_the_wall_span_of_each_paced_run() {
+    bin_dir();
+    let wd = Watchdog::new("bench_pacing", BOUND);
+    let _gate = Gate::share();
+    let out = Running::spawn(
+        &wd,
+        &bin("nauta"),
+        &[
+            "bench",
+            "pacing",
+            "--json",
+            "--duration",
+            "2",
+            "--rate",
+            "20",
+            "--rate",
+            "10",
+        ],
+        None,
+    )
+    .wait(&wd);
+    assert_eq!(out.code(), Some(0), "{out}");
+    let r: Value = serde_json::from_str(out.stdout.trim()).expect("one JSON object");
+    let runs = r["runs"].as_array().expect("runs");
+    assert_eq!(runs.len(), 2, "{r}");
+    for (run, rate) in runs.iter().zip([20.0, 10.0]) {
+        assert_eq!(run["rate"].as_f64(), Some(rate), "{r}");
+        // 100 Hz from t = 0.01 s to t = 2 s.
+        let sim = run["simulated_span_s"].as_f64().expect("simulated span");
+        assert!((sim - 1.99).abs() < 1e-6, "{r}");
+        let expected = run["expected_wall_s"].as_f64().expect("expected");
+        assert!((expected - sim / rate).abs() < 1e-9, "{r}");
+        let wall = run["wall_span_s"].as_f64().expect("wall span");
+        let error = run["error_s"].as_f64().expect("error");
+        assert!(
+            wall > 0.0 && (error - (wall - expected)).abs() < 1e-9,
+            "{r}"
+        );
+        assert!(run["within_target"].is_boolean(), "{r}");
+    }
+}
