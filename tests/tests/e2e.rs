@@ -490,3 +490,82 @@ fn attitude_gaps_parsing() {
     assert_eq!(attitude_input_gaps(log), Some(617));
     assert_eq!(attitude_input_gaps("nothing"), None);
 }
+
+/// A pseudo-terminal: (master, path of the slave).
+fn open_pty() -> (std::fs::File, std::path::PathBuf) {
+    use std::os::fd::FromRawFd;
+    // SAFETY: posix_openpt returns a new descriptor we own (or -1).
+    let fd = unsafe { libc::posix_openpt(libc::O_RDWR | libc::O_NOCTTY) };
+    assert!(fd >= 0, "posix_openpt: {}", std::io::Error::last_os_error());
+    // SAFETY: `fd` is a valid pty master; `name` is large enough for ptsname_r.
+    let mut name = [0 as libc::c_char; 128];
+    let ok = unsafe {
+        libc::grantpt(fd) == 0
+            && libc::unlockpt(fd) == 0
+            && libc::ptsname_r(fd, name.as_mut_ptr(), name.len()) == 0
+    };
+    assert!(ok, "pty setup: {}", std::io::Error::last_os_error());
+    // SAFETY: ptsname_r wrote a NUL-terminated path into `name`.
+    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
+        .to_string_lossy()
+        .into_owned();
+    // SAFETY: `fd` is ours and owned by the File from here on.
+    (unsafe { std::fs::File::from_raw_fd(fd) }, path.into())
+}
+
+/// Log lines carry colour codes when stderr is a terminal, and none when
+/// `NO_COLOR` is set there too (<https://no-color.org>); on a pipe they never
+/// do (`the_summary_line_and_the_json_summary_agree`).
+#[test]
+fn log_colour_on_a_terminal_unless_no_color() {
+    use std::io::Read;
+    bin_dir();
+    let wd = Watchdog::new("log_colour_on_a_terminal", BOUND);
+    let run = |no_color: Option<&str>| -> String {
+        let (mut master, slave_path) = open_pty();
+        let slave = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&slave_path)
+            .unwrap_or_else(|e| panic!("open {}: {e}", slave_path.display()));
+        let ns = Namespace::unique();
+        let mut cmd = std::process::Command::new(bin("nauta"));
+        cmd.current_dir(workspace_root())
+            .args(["launch", &survey_manifest().display().to_string(), "--json"])
+            .args(["--fast", "--duration", "2", "--namespace", ns.as_str()])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(slave)
+            .env_remove("NO_COLOR");
+        if let Some(v) = no_color {
+            cmd.env("NO_COLOR", v);
+        }
+        let _gate = Gate::share();
+        let mut child = cmd.spawn().expect("start nauta launch");
+        wd.watch(child.id());
+        // The slave closes in this process with `cmd`; the master reads until
+        // the last process holding it (the launcher and its children) exits.
+        drop(cmd);
+        let reader = std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            let _ = master.read_to_end(&mut buf); // EIO once every writer is gone
+            String::from_utf8_lossy(&buf).into_owned()
+        });
+        let status = child.wait().expect("wait");
+        wd.unwatch(child.id());
+        let text = reader.join().expect("reader");
+        assert!(status.success(), "{status}\n{text}");
+        assert!(text.contains("INFO"), "no log on the terminal\n{text}");
+        text
+    };
+    assert!(run(None).contains('\u{1b}'), "no colour on a terminal");
+    assert!(
+        run(Some("")).contains('\u{1b}'),
+        "an empty NO_COLOR disabled colour"
+    );
+    let plain = run(Some("1"));
+    assert!(
+        !plain.contains('\u{1b}'),
+        "colour despite NO_COLOR=1\n{plain}"
+    );
+}
