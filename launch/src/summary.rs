@@ -53,7 +53,8 @@ pub struct RunSummary {
     pub restarts: BTreeMap<String, u32>,
     /// Hot swaps per process, those with any.
     pub swaps: BTreeMap<String, u32>,
-    /// How the run ended: `end` (every process finished), `signal`
+    /// How the run ended: `end` (by itself: every process finished, or one
+    /// failed; see `exit`), `signal`
     /// (SIGINT/SIGTERM to the launcher) or `request` (`nauta stop`).
     pub stopped: Stopped,
     /// `ok`, or `failed` when a process failed beyond its restart policy or
@@ -138,7 +139,7 @@ pub struct SensorSpan {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Stopped {
-    /// Every process finished.
+    /// By itself: every process finished, or one failed.
     End,
     /// A signal to the launcher.
     Signal,

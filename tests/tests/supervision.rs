@@ -490,6 +490,19 @@ fn status_of(ns: &Namespace, name: &str) -> Option<serde_json::Value> {
         .cloned()
 }
 
+/// The pid of the attitude process once `nauta status` says it runs (killed
+/// before, it would fail the run's start instead of being restarted); `None`
+/// if the run ended first.
+fn running_attitude_pid(wd: &Watchdog, ns: &Namespace, launch: &mut Running) -> Option<u32> {
+    let mut attitude = None;
+    let up = wait_until(wd, Duration::from_secs(60), || {
+        attitude = status_of(ns, "attitude").filter(|a| a["state"] == "running");
+        attitude.is_some() || !launch.is_running()
+    });
+    let pid = attitude.and_then(|a| a["pid"].as_u64())? as u32;
+    (up && launch.is_running()).then_some(pid)
+}
+
 /// The `nauta status` table's row of `process` as (column, value) pairs.
 fn status_row(table: &str, process: &str) -> BTreeMap<String, String> {
     let mut lines = table.lines().skip_while(|l| !l.starts_with("process "));
@@ -532,20 +545,13 @@ fn the_shipped_survey_restarts_a_killed_estimator_and_status_counts_restarts_and
     );
     let launcher = launch.pid();
     let running = |ns: &Namespace| status_of(ns, "attitude").filter(|a| a["state"] == "running");
-    let mut attitude = None;
-    let up = wait_until(&wd, Duration::from_secs(60), || {
-        attitude = running(&ns);
-        attitude.is_some() || !launch.is_running()
-    });
-    assert!(
-        up && launch.is_running(),
-        "the attitude never ran\n{}",
-        launch.wait(&wd)
-    );
-    let pid = attitude
-        .as_ref()
-        .and_then(|a| a["pid"].as_u64())
-        .expect("pid") as u32;
+    let Some(pid) = running_attitude_pid(&wd, &ns, &mut launch) else {
+        panic!(
+            "the attitude never ran
+{}",
+            launch.wait(&wd)
+        );
+    };
     assert_eq!(
         pgrep_children(launcher, "nauta-attitude"),
         vec![pid],
@@ -605,6 +611,47 @@ fn the_shipped_survey_restarts_a_killed_estimator_and_status_counts_restarts_and
     assert_eq!((s.restarts("attitude"), s.swaps("attitude")), (1, 1), "{s}");
     assert_eq!(s.stopped(), Some("request"), "{s}");
     assert!(s.all_exited_0(), "{s}");
+}
+
+/// Issue 11: a run whose estimator dies without a restart policy ends as
+/// failed, and its JSON summary names the process and why.
+#[test]
+fn a_crash_without_restart_fails_the_run_and_the_summary_names_it() {
+    bin_dir();
+    let wd = Watchdog::new("crash_without_restart", BOUND);
+    let ns = Namespace::unique();
+    let mut launch = start_launch(
+        &wd,
+        &[
+            "--clock",
+            "wall",
+            "--duration",
+            "600",
+            "--namespace",
+            ns.as_str(),
+            "--set",
+            "attitude.restart={ policy = \"never\" }",
+        ],
+    );
+    let Some(pid) = running_attitude_pid(&wd, &ns, &mut launch) else {
+        panic!(
+            "the attitude never ran
+{}",
+            launch.wait(&wd)
+        );
+    };
+    // SAFETY: kill(2) on the attitude process of this test's own run.
+    unsafe {
+        libc::kill(pid as i32, libc::SIGKILL);
+    }
+    let out = launch.wait(&wd);
+    assert_eq!(out.code(), Some(1), "{out}");
+    let s = out.summary();
+    assert_eq!(s.json["exit"], "failed", "{s}");
+    assert_eq!(s.json["exit_code"], 1, "{s}");
+    assert_eq!(s.stopped(), Some("end"), "{s}");
+    assert_eq!(s.failure(), Some("attitude exited -9"), "{s}");
+    assert_eq!(s.restarts("attitude"), 0, "{s}");
 }
 
 /// Issue 4: a running pipeline is controlled from another shell: `status`
