@@ -5,13 +5,15 @@
 //!
 //! - [`data`]: the recording read into checked, sorted samples;
 //! - [`run_info`]: the mission frame (origin, transponders) from metadata;
-//! - [`compute`]: matching, per-sample errors and the metrics.
+//! - [`compute`]: matching, per-sample errors and the metrics;
+//! - [`live`]: the same evaluation of a running pipeline (`nauta launch`'s summary).
 //!
 //! `nauta report` shows the same [`Evaluation`], so its table and plots are
 //! the figures `nauta eval` prints.
 
 pub mod compute;
 pub mod data;
+pub mod live;
 pub mod run_info;
 
 use std::collections::BTreeMap;

@@ -16,6 +16,7 @@ use nauta_runtime::{
 use crate::children;
 use crate::monitor::{self, Observer, Tap};
 use crate::pipeline::StatusWriter;
+use crate::summary::{Report, RunSummary};
 use crate::supervisor::{Outcome, Restart, Supervisor};
 
 /// Options of `nauta launch`.
@@ -49,6 +50,17 @@ pub struct LaunchArgs {
     /// on failure, into FILE.K.mcap) or points the manifest's logger there.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
+}
+
+/// `nauta launch`: [`LaunchArgs`] and how to print the summary.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LaunchCommand {
+    #[command(flatten)]
+    pub args: LaunchArgs,
+    /// Print the run summary as one JSON object on stdout (keys in the
+    /// README, "The run summary") instead of one line.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// How long a process may take to report ready.
@@ -288,8 +300,27 @@ pub fn check(args: &LaunchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs the pipeline; returns the process exit code.
+/// Runs the pipeline and prints its summary line; returns the process exit code.
 pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
+    let summary = run_to_summary(args)?;
+    println!("{}", summary.line());
+    Ok(summary.exit_code)
+}
+
+/// `nauta launch`: runs the pipeline and prints its summary, as one line or
+/// (`--json`) one JSON object; returns the process exit code.
+pub fn launch(cmd: &LaunchCommand) -> anyhow::Result<u8> {
+    let summary = run_to_summary(&cmd.args)?;
+    if cmd.json {
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        println!("{}", summary.line());
+    }
+    Ok(summary.exit_code)
+}
+
+/// Runs the pipeline to its end; its summary.
+fn run_to_summary(args: &LaunchArgs) -> anyhow::Result<RunSummary> {
     let Plan { manifest, procs } = prepare(&args.manifest, &overrides(args))?;
     let namespace = match (&args.namespace, manifest.run.namespace.as_str()) {
         (Some(ns), _) => Namespace::new(ns)?,
@@ -495,17 +526,19 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     {
         failures.insert(0, f);
     }
-    let summary_line = summary(&Report {
-        manifest: &manifest,
-        ns: &namespace,
-        wall,
-        taps: &taps,
-        obs: &observer,
-        sup: &sup,
-        failures: &failures,
-        exit,
-        stopped_by_request: stop_requested,
-    });
+    let summary = RunSummary::new(
+        Report {
+            manifest: &manifest,
+            ns: &namespace,
+            wall,
+            taps: &taps,
+            sup: &sup,
+            failures,
+            exit,
+            stopped_by_request: stop_requested,
+        },
+        &mut observer,
+    );
     drop(taps);
     drop(inboxes);
     drop(events);
@@ -513,15 +546,7 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
     drop((pipeline, pipeline_inbox));
     ctx.finish();
     let _ = std::fs::remove_dir_all(&run_dir);
-
-    println!("{summary_line}");
-    Ok(if exit == LoopExit::Signal {
-        130
-    } else if failures.is_empty() {
-        0
-    } else {
-        1
-    })
+    Ok(summary)
 }
 
 /// What went wrong: processes that failed beyond their policy, and the last
@@ -709,113 +734,4 @@ fn stop_all(sup: &mut Supervisor) {
             let _ = r.child.wait().map(|s| r.status = Some(s));
         }
     }
-}
-
-/// What the summary line reports.
-struct Report<'a> {
-    manifest: &'a Manifest,
-    ns: &'a Namespace,
-    wall: Duration,
-    taps: &'a [Box<dyn Tap>],
-    obs: &'a Observer,
-    sup: &'a Supervisor,
-    failures: &'a [String],
-    exit: LoopExit,
-    stopped_by_request: bool,
-}
-
-fn summary(r: &Report<'_>) -> String {
-    let Report {
-        manifest,
-        ns,
-        wall,
-        taps,
-        obs,
-        sup,
-        failures,
-        exit,
-        stopped_by_request,
-    } = *r;
-    // The sensor's own stream (the truth, else the IMU): what was simulated,
-    // and over how much wall time its first and last samples arrived.
-    let sensor = [TRUTH_SERVICE, IMU_SERVICE]
-        .iter()
-        .find_map(|name| taps.iter().find(|t| t.service() == *name && t.count() > 0));
-    let mission_s = sensor
-        .and_then(|t| t.span())
-        .map_or(manifest.run.duration_s, |(_, last)| last as f64 * 1e-9);
-    let mut parts = vec![format!(
-        "nauta: run {ns} {} {:.1} s mission in {:.2} s wall ({:.1}x)",
-        manifest.clock().name(),
-        mission_s,
-        wall.as_secs_f64(),
-        mission_s / wall.as_secs_f64().max(1e-9)
-    )];
-    let mut gaps = 0;
-    for t in taps {
-        gaps += t.gaps();
-        let s = t.service();
-        if s.ends_with("/progress") || s.ends_with("/snapshot") || s.ends_with("/health") {
-            continue;
-        }
-        let rate = match t.span() {
-            Some((a, b)) if b > a && t.count() > 1 => {
-                (t.count() - 1) as f64 / ((b - a) as f64 * 1e-9)
-            }
-            _ => 0.0,
-        };
-        parts.push(format!("{s} {} msgs {:.1} Hz", t.count(), rate));
-    }
-    if let Some(t) = sensor
-        && let (Some((a, b)), Some(w)) = (t.span(), t.wall_span())
-    {
-        parts.push(format!(
-            "{} span {:.3} s simulated in {:.3} s wall",
-            t.service(),
-            (b - a) as f64 * 1e-9,
-            w.as_secs_f64()
-        ));
-    }
-    parts.push(format!("gaps {gaps}"));
-    let (lost, rejected) = obs.process_losses();
-    parts.push(format!("lost in processes {lost}, rejected {rejected}"));
-    match obs.rms_deg() {
-        Some([r, p, y, tot]) => parts.push(format!(
-            "attitude error rms roll {r:.3}° pitch {p:.3}° yaw {y:.3}° total {tot:.3}° max {:.3}° over {} samples",
-            obs.max_total_deg(),
-            obs.compared
-        )),
-        None => parts.push("attitude error: no estimate matched a truth sample".into()),
-    }
-    parts.push(format!("attitude digest {:016x}", obs.digest()));
-    let restarts: Vec<String> = sup
-        .members
-        .iter()
-        .filter(|m| m.restarts > 0)
-        .map(|m| format!("{} {}", m.name, m.restarts))
-        .collect();
-    if !restarts.is_empty() {
-        parts.push(format!("restarts {}", restarts.join(", ")));
-    }
-    let swaps: Vec<String> = sup
-        .members
-        .iter()
-        .filter(|m| m.swaps > 0)
-        .map(|m| format!("{} {}", m.name, m.swaps))
-        .collect();
-    if !swaps.is_empty() {
-        parts.push(format!("swaps {}", swaps.join(", ")));
-    }
-    if exit == LoopExit::Signal {
-        parts.push("stopped by signal".into());
-    }
-    if stopped_by_request {
-        parts.push("stopped by request".into());
-    }
-    if failures.is_empty() {
-        parts.push("all processes exited 0".into());
-    } else {
-        parts.push(format!("FAILED: {}", failures.join(", ")));
-    }
-    parts.join(" | ")
 }

@@ -15,6 +15,7 @@ mod logcmd;
 mod monitor;
 mod pipeline;
 mod report;
+mod summary;
 mod supervisor;
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
@@ -28,7 +29,7 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run a pipeline from a manifest (e.g. `nauta launch launch/survey.toml --duration 60 --fast`).
-    Launch(launch::LaunchArgs),
+    Launch(launch::LaunchCommand),
     /// Validate a manifest without starting anything: schema and values, the
     /// binaries and their variants, the wiring (`nauta check launch/survey.toml`).
     Check(launch::LaunchArgs),
@@ -150,6 +151,9 @@ enum BenchCommand {
     /// Kill a random estimator every 5-15 s of a wall-clock survey at 10x; restarts,
     /// latencies, losses and the attitude error beside a run without kills.
     Chaos(bench::chaos::ChaosArgs),
+    /// Wall-clock pacing: the survey in `wall` clock at each `--rate` (1 and
+    /// 10 by default); the sensor's wall span against the expected.
+    Pacing(bench::pacing::PacingArgs),
     /// Attitude estimators in-process: BROAD real data (`--broad DIR`) with the BROAD
     /// metric, or paper 000's simulated conditions (`--sim`) and the PF's throughput.
     Attitude {
@@ -191,7 +195,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
-        Command::Launch(args) => launch::run(&args).map(ExitCode::from),
+        Command::Launch(cmd) => launch::launch(&cmd).map(ExitCode::from),
         Command::Check(args) => launch::check(&args).map(|()| ExitCode::SUCCESS),
         Command::Status { json, namespace } => {
             pipeline::status(json, namespace.as_deref()).map(|()| ExitCode::SUCCESS)
@@ -240,6 +244,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Pacing(args) => bench::pacing::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Attitude { broad, sim, json } => match (broad, sim) {
                 (Some(dir), _) => bench::attitude::run_broad(&dir, json),
                 (None, _) => bench::attitude::run_sim(json),

@@ -1,16 +1,19 @@
 //! The launcher's view of a run: a tap on every output service the processes
-//! describe (through the message registry, as the logger will do), message counts
-//! and rates, and the attitude error against the truth, for the summary line.
+//! describe (through the message registry, as the logger does), message counts,
+//! rates and sequence gaps, and what the run summary reports of the estimates:
+//! `nauta eval`'s errors and a digest per estimate stream.
 
 use std::any::Any;
+use std::collections::BTreeMap;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
-use nauta_estimation::AttitudeError;
-use nauta_messages::checked::{Attitude, Truth};
 use nauta_messages::registry::{MessageVisitor, visit_by_name};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
-use nauta_runtime::{Connect, Context, OrderedMerge, Subscriber, services};
+use nauta_runtime::{Connect, Context, Manifest, Subscriber, services};
+
+use crate::eval::{self, Data, Evaluation, data::StreamKind};
 
 /// A type-erased subscriber.
 pub trait Tap {
@@ -124,25 +127,22 @@ pub fn tap(ctx: &Context, service: &str, type_name: &str) -> anyhow::Result<(Box
         .unwrap_or_else(|| anyhow::bail!("no tap made for {service}"))
 }
 
-enum Item {
-    Truth(Box<Truth>),
-    Attitude(Box<Attitude>),
-}
-
-/// Attitude error against the truth, matched by stamp, and a digest of every
-/// attitude output (equal digests: bit-identical outputs).
+/// What the launcher learns from the messages its taps receive: the truth and
+/// every estimate stream, kept as `nauta eval` reads them from a recording (so
+/// the summary's errors are eval's), a digest of each estimate stream, and
+/// each process's latest health.
+#[derive(Default)]
 pub struct Observer {
-    merge: OrderedMerge<Item>,
-    last_truth: Option<Truth>,
-    /// Estimates compared with a truth of the same stamp.
-    pub compared: u64,
-    sum_sq: [f64; 4],
-    max_total: f64,
-    digest: u64,
-    health: std::collections::BTreeMap<String, (u64, u64)>,
+    /// The truth and the estimate streams, checked as eval checks them.
+    data: Data,
+    /// FNV-1a (64 bit) of the encoding of every message of each estimate
+    /// stream, in the order received.
+    digests: BTreeMap<String, u64>,
+    /// The latest (dropped, rejected) of each (health service, instance).
+    health: BTreeMap<(String, u32), (u64, u64)>,
     /// Per health service: the previous and the latest message, with the
     /// time each arrived (rates for `nauta status`).
-    pub latest_health: std::collections::BTreeMap<String, HealthPair>,
+    pub latest_health: BTreeMap<String, HealthPair>,
 }
 
 /// A health message and when it arrived.
@@ -150,108 +150,204 @@ pub type TimedHealth = (Instant, Health);
 /// The previous (if any) and the latest health message of a process.
 pub type HealthPair = (Option<TimedHealth>, TimedHealth);
 
-const TRUTH: usize = 0;
-const ATTITUDE: usize = 1;
-
-impl Default for Observer {
-    fn default() -> Self {
-        Observer {
-            merge: OrderedMerge::new(2),
-            last_truth: None,
-            compared: 0,
-            sum_sq: [0.0; 4],
-            max_total: 0.0,
-            digest: 0xcbf2_9ce4_8422_2325,
-            health: Default::default(),
-            latest_health: Default::default(),
-        }
-    }
-}
+/// FNV-1a's offset basis (64 bit).
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+/// FNV-1a's prime (64 bit).
+const FNV_PRIME: u64 = 0x0100_0000_01b3;
 
 impl Observer {
-    fn observe(&mut self, service: &str, msg: &dyn Any) {
-        if let Some(t) = msg.downcast_ref::<TruthState>()
-            && let Ok(t) = Truth::try_from(t)
-        {
-            let _ = self.merge.push(TRUTH, t.stamp_ns, Item::Truth(Box::new(t)));
-        } else if let Some(a) = msg.downcast_ref::<AttitudeEstimate>() {
-            if let Ok(bytes) = codec::encode(a) {
-                for b in bytes {
-                    // FNV-1a, 64 bit.
-                    self.digest = (self.digest ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+    fn observe<M: Message>(&mut self, service: &str, msg: &M) {
+        let estimate = StreamKind::of(M::TYPE_NAME).is_some();
+        if estimate || service == TRUTH_SERVICE {
+            match codec::encode(msg) {
+                Ok(bytes) => {
+                    if estimate {
+                        let d = self.digests.entry(service.to_owned()).or_insert(FNV_OFFSET);
+                        for b in &bytes {
+                            *d = (*d ^ u64::from(*b)).wrapping_mul(FNV_PRIME);
+                        }
+                    }
+                    self.data.take(service, M::TYPE_NAME, &bytes);
                 }
+                Err(e) => tracing::warn!(%service, error = %e, "message not evaluated"),
             }
-            if let Ok(checked) = Attitude::try_from(a) {
-                let _ = self.merge.push(
-                    ATTITUDE,
-                    checked.stamp_ns,
-                    Item::Attitude(Box::new(checked)),
-                );
-            }
-        } else if let Some(h) = msg.downcast_ref::<Health>() {
-            self.health
-                .insert(service.to_owned(), (h.dropped, h.rejected));
+        } else if let Some(h) = (msg as &dyn Any).downcast_ref::<Health>() {
+            self.health.insert(
+                (service.to_owned(), h.header.instance),
+                (h.dropped, h.rejected),
+            );
             let now = Instant::now();
             let prev = self.latest_health.remove(service).map(|(_, last)| last);
             self.latest_health
                 .insert(service.to_owned(), (prev, (now, *h)));
-        } else if let Some(p) = msg.downcast_ref::<Progress>()
-            && p.header.is_end_of_stream()
-        {
-            if service == progress_service(Role::Sensor.name()) {
-                self.merge.end(TRUTH);
-            } else if service == progress_service(Role::Attitude.name()) {
-                self.merge.end(ATTITUDE);
-            }
         }
-        self.settle();
     }
 
-    fn settle(&mut self) {
-        while let Some((_, stamp, item)) = self.merge.pop() {
-            match item {
-                Item::Truth(t) => self.last_truth = Some(*t),
-                Item::Attitude(a) => {
-                    if let Some(t) = self.last_truth.as_ref().filter(|t| t.stamp_ns == stamp) {
-                        let e = AttitudeError::between(&a.attitude, &t.attitude);
-                        for (s, v) in self.sum_sq.iter_mut().zip([
-                            e.roll_rad,
-                            e.pitch_rad,
-                            e.yaw_rad,
-                            e.total_rad,
-                        ]) {
-                            *s += v * v;
-                        }
-                        self.max_total = self.max_total.max(e.total_rad);
-                        self.compared += 1;
-                    }
+    /// `nauta eval`'s evaluation of every estimate stream received, against
+    /// the truth received (the local frame of `lbl/nav` from `manifest`'s
+    /// site); `None` when the run had no estimate or no truth.
+    pub fn evaluate(&mut self, manifest: &Manifest) -> Option<Evaluation> {
+        let data = &mut self.data;
+        data.run = eval::live::run_info(manifest);
+        eval::live::sort(data);
+        match eval::evaluate(Path::new("the run"), data) {
+            Ok(e) => {
+                for (topic, why) in &e.skipped {
+                    tracing::warn!(%topic, "not evaluated: {why}");
                 }
+                Some(e)
+            }
+            Err(e) => {
+                tracing::debug!("no estimate errors: {e:#}");
+                None
             }
         }
     }
 
-    /// RMS roll, pitch, yaw and total attitude error, degrees.
-    pub fn rms_deg(&self) -> Option<[f64; 4]> {
-        (self.compared > 0).then(|| {
-            self.sum_sq
-                .map(|s| (s / self.compared as f64).sqrt().to_degrees())
-        })
+    /// The digest of each estimate stream (hex), equal for equal outputs.
+    pub fn digests(&self) -> BTreeMap<String, String> {
+        self.digests
+            .iter()
+            .map(|(t, d)| (t.clone(), format!("{d:016x}")))
+            .collect()
     }
 
-    /// Largest total attitude error, degrees.
-    pub fn max_total_deg(&self) -> f64 {
-        self.max_total.to_degrees()
-    }
-
-    /// Messages lost and rejected inside the processes, from their last health.
+    /// Messages lost and rejected inside the processes: the sum over every
+    /// instance (a restarted one counts from zero) of its last health.
     pub fn process_losses(&self) -> (u64, u64) {
         self.health
             .values()
             .fold((0, 0), |(l, r), (dl, dr)| (l + dl, r + dr))
     }
+}
 
-    /// FNV-1a digest of every attitude estimate's encoding, in order.
-    pub fn digest(&self) -> u64 {
-        self.digest
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nauta_estimation::earth::{meridian_radius, transverse_radius};
+
+    const DEPTH_M: f64 = 10.0;
+
+    fn survey() -> Manifest {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("survey.toml");
+        Manifest::load(&path).expect("launch/survey.toml loads")
+    }
+
+    /// 100 truth samples at the survey's origin, at rest, and for each stamp
+    /// one message of every estimate type, each off by a known error: yaw
+    /// +0.01 rad, `ains/nav` 1 m north, `positioning/fix` 2 m east, `lbl/nav`
+    /// 3 m north in the local frame of the manifest's site.
+    fn observe_run(obs: &mut Observer, site: &nauta_runtime::manifest::Site, yaw: f64) {
+        let (lat, lon) = (
+            site.latitude_deg.to_radians(),
+            site.longitude_deg.to_radians(),
+        );
+        let h = -DEPTH_M;
+        for i in 1..=100u64 {
+            let stamp = i * 10_000_000;
+            let header = |role| Header::new(stamp, i - 1, role, 0);
+            let truth = TruthState {
+                header: header(Role::Sensor),
+                lat_rad: lat,
+                lon_rad: lon,
+                depth_m: DEPTH_M,
+                quat_nb: [1.0, 0.0, 0.0, 0.0],
+                ..Default::default()
+            };
+            obs.observe(TRUTH_SERVICE, &truth);
+            let att = AttitudeEstimate {
+                header: header(Role::Attitude),
+                quat_nb: [(yaw / 2.0).cos(), 0.0, 0.0, (yaw / 2.0).sin()],
+                ..Default::default()
+            };
+            obs.observe(ATTITUDE_ESTIMATE_SERVICE, &att);
+            let nav = NavSolution {
+                header: header(Role::Ains),
+                lat_rad: lat + 1.0 / (meridian_radius(lat) + h),
+                lon_rad: lon,
+                depth_m: DEPTH_M,
+                ..Default::default()
+            };
+            obs.observe(NAV_SOLUTION_SERVICE, &nav);
+            let fix = PositionFix {
+                header: header(Role::Positioning),
+                lat_rad: lat,
+                lon_rad: lon + 2.0 / ((transverse_radius(lat) + h) * lat.cos()),
+                ..Default::default()
+            };
+            obs.observe(POSITION_FIX_SERVICE, &fix);
+            let lbl = LblSolution {
+                header: header(Role::Lbl),
+                x_m: 3.0,
+                ..Default::default()
+            };
+            obs.observe(LBL_SOLUTION_SERVICE, &lbl);
+        }
+    }
+
+    #[test]
+    fn every_estimate_stream_is_evaluated_and_digested() {
+        let manifest = survey();
+        let site = manifest.site.expect("the survey has a site");
+        let mut obs = Observer::default();
+        observe_run(&mut obs, &site, 0.01);
+        let eval = obs.evaluate(&manifest).expect("an evaluation");
+        assert!(eval.skipped.is_empty(), "{:?}", eval.skipped);
+        let horizontal = |topic: &str| {
+            let m = &eval.streams[topic];
+            assert_eq!(
+                (m.samples, m.unmatched, m.rejected),
+                (100, 0, 0),
+                "{topic}: {m:?}"
+            );
+            m.horizontal_rms_m.expect("horizontal error")
+        };
+        assert!((horizontal(NAV_SOLUTION_SERVICE) - 1.0).abs() < 1e-3);
+        assert!((horizontal(POSITION_FIX_SERVICE) - 2.0).abs() < 1e-3);
+        assert!((horizontal(LBL_SOLUTION_SERVICE) - 3.0).abs() < 1e-3);
+        let att = &eval.streams[ATTITUDE_ESTIMATE_SERVICE];
+        assert_eq!(att.samples, 100);
+        let yaw = att.yaw_rms_deg.expect("yaw");
+        assert!((yaw - 0.01f64.to_degrees()).abs() < 1e-9, "{yaw}");
+
+        // Equal outputs, equal digests; one stream changed, only its digest.
+        let digests = obs.digests();
+        assert_eq!(digests.len(), 4, "{digests:?}");
+        let mut same = Observer::default();
+        observe_run(&mut same, &site, 0.01);
+        assert_eq!(same.digests(), digests);
+        let mut other = Observer::default();
+        observe_run(&mut other, &site, 0.02);
+        let changed: Vec<&String> = digests
+            .keys()
+            .filter(|t| other.digests()[*t] != digests[*t])
+            .collect();
+        assert_eq!(changed, [ATTITUDE_ESTIMATE_SERVICE]);
+    }
+
+    #[test]
+    fn the_attitude_digest_is_fnv_1a_of_the_encodings() {
+        let mut obs = Observer::default();
+        let est = AttitudeEstimate {
+            header: Header::new(10_000_000, 0, Role::Attitude, 0),
+            quat_nb: [1.0, 0.0, 0.0, 0.0],
+            ..Default::default()
+        };
+        obs.observe(ATTITUDE_ESTIMATE_SERVICE, &est);
+        obs.observe(ATTITUDE_ESTIMATE_SERVICE, &est);
+        // FNV-1a as published (http://www.isthe.com/chongo/tech/comp/fnv/):
+        // the empty input hashes to the offset basis, "a" to af63dc4c8601ec8c.
+        let fnv = |bytes: &[u8]| {
+            bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+                (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+            })
+        };
+        assert_eq!(fnv(b"a"), 0xaf63_dc4c_8601_ec8c);
+        let bytes = codec::encode(&est).expect("encodes");
+        let twice = [bytes.clone(), bytes].concat();
+        assert_eq!(
+            obs.digests()[ATTITUDE_ESTIMATE_SERVICE],
+            format!("{:016x}", fnv(&twice))
+        );
     }
 }

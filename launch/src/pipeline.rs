@@ -4,7 +4,8 @@
 //! Every `nauta launch` registers its run in its run directory
 //! (`$TMPDIR/nauta/<namespace>/status.json`, rewritten every second and after
 //! every change): the launcher's pid and each process's pid, variant, state,
-//! uptime, restarts, rates and losses (from the processes' health). `status`
+//! uptime, restarts and swaps (counted apart), rates and losses (from the
+//! processes' health). `status`
 //! reads it; the commands go to the launcher over iceoryx2 request-response
 //! (`launcher/control/0` in the run's namespace).
 
@@ -250,7 +251,7 @@ pub fn status(json: bool, namespace: Option<&str>) -> anyhow::Result<()> {
         run.namespace, run.manifest, run.clock, run.launcher_pid, age
     );
     println!(
-        "{:<12} {:>8} {:>4} {:<10} {:<10} {:>9} {:>8} {:>9} {:>9} {:>8} {:>8}",
+        "{:<12} {:>8} {:>4} {:<10} {:<10} {:>9} {:>8} {:>5} {:>9} {:>9} {:>8} {:>8}",
         "process",
         "pid",
         "inst",
@@ -258,6 +259,7 @@ pub fn status(json: bool, namespace: Option<&str>) -> anyhow::Result<()> {
         "state",
         "uptime s",
         "restarts",
+        "swaps",
         "in/s",
         "out/s",
         "rejected",
@@ -265,14 +267,15 @@ pub fn status(json: bool, namespace: Option<&str>) -> anyhow::Result<()> {
     );
     for p in &run.processes {
         println!(
-            "{:<12} {:>8} {:>4} {:<10} {:<10} {:>9.1} {:>8} {:>9.1} {:>9.1} {:>8} {:>8}",
+            "{:<12} {:>8} {:>4} {:<10} {:<10} {:>9.1} {:>8} {:>5} {:>9.1} {:>9.1} {:>8} {:>8}",
             p.name,
             p.pid,
             p.instance,
             p.variant,
             p.state,
             p.uptime_s,
-            p.restarts + p.swaps,
+            p.restarts,
+            p.swaps,
             p.inputs_per_s,
             p.outputs_per_s,
             p.rejected,

@@ -1,5 +1,5 @@
 //! Helpers of nauta's end-to-end tests: locating (and building once) the
-//! workspace binaries, running `nauta launch`, parsing its summary line, a
+//! workspace binaries, running `nauta launch --json`, reading its summary, a
 //! watchdog that bounds every test, and the namespace's shared-memory files.
 //!
 //! The tests themselves are in `tests/e2e.rs`.
@@ -15,6 +15,9 @@ use std::time::{Duration, Instant};
 
 use nauta_messages::{Role, RunEvent, event_kind, fixed_str};
 use nauta_runtime::{Context, Manifest, Namespace, Subscriber, services};
+
+mod summary;
+pub use summary::Summary;
 
 // ---------------------------------------------------------------------------
 // Binaries and files of the workspace
@@ -329,10 +332,10 @@ impl Finished {
         self.status.code()
     }
 
-    /// The summary line of `nauta launch`.
+    /// The run summary of `nauta launch --json` (every launch helper here
+    /// passes `--json`).
     pub fn summary(&self) -> Summary {
-        Summary::find(&self.stdout)
-            .unwrap_or_else(|| panic!("no summary line in the output\n{self}"))
+        Summary::parse(&self.stdout).unwrap_or_else(|e| panic!("{e}\n{self}"))
     }
 }
 
@@ -475,104 +478,52 @@ impl Drop for Running {
     }
 }
 
-/// Starts `nauta launch <survey.toml> <args>`, sharing the launch gate.
+/// `launch MANIFEST --json ARGS`: the arguments of every launch the tests run.
+fn launch_args(manifest: &Path, args: &[&str]) -> Vec<String> {
+    [
+        "launch".to_owned(),
+        manifest.display().to_string(),
+        "--json".to_owned(),
+    ]
+    .into_iter()
+    .chain(args.iter().map(|s| s.to_string()))
+    .collect()
+}
+
+/// Starts `nauta launch <survey.toml> --json <args>`, sharing the launch gate.
 pub fn start_launch(wd: &Watchdog, args: &[&str]) -> Running {
     start_launch_with(wd, args, Some(Gate::share()))
 }
 
-/// Starts `nauta launch <survey.toml> <args>` with an explicit gate share
-/// (`None` for a test that holds the gate closed).
+/// Starts `nauta launch <survey.toml> --json <args>` with an explicit gate
+/// share (`None` for a test that holds the gate closed).
 pub fn start_launch_with(wd: &Watchdog, args: &[&str], gate: Option<Shared>) -> Running {
-    let manifest = survey_manifest();
-    let mut all: Vec<String> = vec!["launch".into(), manifest.display().to_string()];
-    all.extend(args.iter().map(|s| s.to_string()));
-    Running::spawn(wd, &bin("nauta"), &all, gate)
+    Running::spawn(
+        wd,
+        &bin("nauta"),
+        &launch_args(&survey_manifest(), args),
+        gate,
+    )
 }
 
-/// Runs `nauta launch <survey.toml> <args>` to its end.
+/// Runs `nauta launch <survey.toml> --json <args>` to its end.
 pub fn launch(wd: &Watchdog, args: &[&str]) -> Finished {
     start_launch(wd, args).wait(wd)
 }
 
-/// Runs `nauta launch <manifest> <args>` to its end, sharing the launch gate.
+/// Starts `nauta launch <manifest> --json <args>`, sharing the launch gate.
+pub fn start_launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> Running {
+    Running::spawn(
+        wd,
+        &bin("nauta"),
+        &launch_args(manifest, args),
+        Some(Gate::share()),
+    )
+}
+
+/// Runs `nauta launch <manifest> --json <args>` to its end, sharing the launch gate.
 pub fn launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> Finished {
-    let mut all: Vec<String> = vec!["launch".into(), manifest.display().to_string()];
-    all.extend(args.iter().map(|s| s.to_string()));
-    Running::spawn(wd, &bin("nauta"), &all, Some(Gate::share())).wait(wd)
-}
-
-// ---------------------------------------------------------------------------
-// Summary line
-// ---------------------------------------------------------------------------
-
-/// The summary line `nauta launch` prints on stdout.
-#[derive(Debug, Clone)]
-pub struct Summary {
-    /// The line.
-    pub line: String,
-}
-
-impl Summary {
-    /// Finds the summary line in `stdout`.
-    pub fn find(stdout: &str) -> Option<Self> {
-        stdout
-            .lines()
-            .rev()
-            .find(|l| l.starts_with("nauta: run ") && l.contains(" | "))
-            .map(|l| Summary { line: l.to_owned() })
-    }
-
-    fn parts(&self) -> impl Iterator<Item = &str> {
-        self.line.split(" | ").map(str::trim)
-    }
-
-    /// The namespace of the run (`nauta: run NS ...`).
-    pub fn namespace(&self) -> Option<&str> {
-        self.line.strip_prefix("nauta: run ")?.split(' ').next()
-    }
-
-    /// Messages received on `service` (`SERVICE N msgs ...`).
-    pub fn count(&self, service: &str) -> Option<u64> {
-        self.parts().find_map(|p| {
-            let mut w = p.strip_prefix(service)?.strip_prefix(' ')?.split(' ');
-            let n = w.next()?.parse().ok()?;
-            (w.next()? == "msgs").then_some(n)
-        })
-    }
-
-    /// Sequence gaps (`gaps N`).
-    pub fn gaps(&self) -> Option<u64> {
-        self.parts()
-            .find_map(|p| p.strip_prefix("gaps ")?.trim().parse().ok())
-    }
-
-    /// The sensor stream's span (`SERVICE span S s simulated in W s wall`):
-    /// (service, simulated seconds, wall seconds) from its first to its last sample.
-    pub fn sensor_span(&self) -> Option<(String, f64, f64)> {
-        self.parts().find_map(|p| {
-            let (service, rest) = p.split_once(" span ")?;
-            let mut w = rest.split(' ');
-            let sim = w.next()?.parse().ok()?;
-            let wall = w.nth(3)?.parse().ok()?;
-            Some((service.to_owned(), sim, wall))
-        })
-    }
-
-    /// Simulated seconds of the run (`... sim 60.0 s mission ...`).
-    pub fn mission_s(&self) -> Option<f64> {
-        let head = self.parts().next()?;
-        let w: Vec<&str> = head.split(' ').collect();
-        let i = w.iter().position(|x| *x == "mission")?;
-        w.get(i.checked_sub(2)?)?.parse().ok()
-    }
-
-    /// Attitude digest (`attitude digest HEX`).
-    pub fn digest(&self) -> Option<String> {
-        self.parts().find_map(|p| {
-            let d = p.strip_prefix("attitude digest ")?.trim();
-            (!d.is_empty() && d.chars().all(|c| c.is_ascii_hexdigit())).then(|| d.to_owned())
-        })
-    }
+    start_launch_manifest(wd, manifest, args).wait(wd)
 }
 
 // ---------------------------------------------------------------------------
@@ -648,25 +599,6 @@ impl EventWatch {
             std::thread::sleep(Duration::from_millis(5));
         }
     }
-}
-
-/// `s` without ANSI escape sequences (tracing colours its output).
-pub fn strip_ansi(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    let mut chars = s.chars();
-    while let Some(c) = chars.next() {
-        if c == '\u{1b}' {
-            // CSI: ESC [ ... final byte in @..~
-            for d in chars.by_ref() {
-                if ('@'..='~').contains(&d) && d != '[' {
-                    break;
-                }
-            }
-        } else {
-            out.push(c);
-        }
-    }
-    out
 }
 
 // ---------------------------------------------------------------------------

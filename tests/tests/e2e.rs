@@ -39,10 +39,7 @@ fn assert_complete_run(out: &Finished, ns: &Namespace, imu: u64) -> Summary {
          IMU gaps reported by nauta-attitude itself: {:?}\n{out}",
         attitude_input_gaps(&out.stderr)
     );
-    assert!(
-        s.line.contains("all processes exited 0"),
-        "a process failed\n{out}"
-    );
+    assert!(s.all_exited_0(), "a process failed\n{out}");
     assert!(s.digest().is_some(), "no attitude digest\n{out}");
     s
 }
@@ -50,8 +47,7 @@ fn assert_complete_run(out: &Finished, ns: &Namespace, imu: u64) -> Summary {
 /// The IMU gaps nauta-attitude logs when it ends (`attitude: done ... gaps=N`),
 /// for diagnostics: the summary's `gaps` counts only the launcher's own taps.
 fn attitude_input_gaps(stderr: &str) -> Option<u64> {
-    let plain = strip_ansi(stderr);
-    plain
+    stderr
         .lines()
         .filter(|l| l.contains("attitude") && l.contains(" done "))
         .find_map(|l| {
@@ -155,8 +151,7 @@ fn side_by_side_runs_are_isolated() {
         assert_eq!(
             digest(&s),
             digest(side_by_side),
-            "seed {seed}: the run side by side differs from the run alone\nside by side: {}\n{solo}",
-            side_by_side.line
+            "seed {seed}: the run side by side differs from the run alone\nside by side: {side_by_side}\n{solo}"
         );
     }
 }
@@ -221,6 +216,9 @@ fn stop_by_signal_leaves_no_shared_memory(signal: i32, name: &str) {
         Some(130),
         "nauta launch stopped by {name} should exit 130\n{out}"
     );
+    let s = out.summary();
+    assert_eq!(s.stopped(), Some("signal"), "{s}");
+    assert_eq!(s.json["exit_code"], 130, "{s}");
 
     // Processes may finish removing their files just after they exit.
     let gone = wait_until(&wd, Duration::from_secs(10), || ns.shm_files().is_empty());
@@ -389,19 +387,15 @@ fn sim_runs_are_deterministic() {
             ],
         );
         let s = assert_complete_run(&out, &ns, 30_000);
-        // The launcher pairs each estimate with the truth of the same stamp by
-        // merging the two streams in stamp order: equal error figures mean the
-        // same pairing, whatever the scheduling of the two publishers.
-        let error = s
-            .line
-            .split(" | ")
-            .find(|p| p.starts_with("attitude error"))
-            .map(str::to_owned);
+        // The launcher evaluates the estimates against the truth by stamp,
+        // whatever order the two publishers' messages arrived in: equal error
+        // figures mean the same pairing, whatever the scheduling.
+        let error = s.json["errors"]["attitude/estimate"].to_string();
         ((digest(&s), error), out)
     };
     let (first, out1) = run("11");
     assert!(
-        first.1.as_deref().is_some_and(|e| e.contains("rms")),
+        first.1.contains("roll_rms_deg"),
         "no attitude error in the summary\n{out1}"
     );
     let (second, out2) = run("11");
@@ -416,28 +410,162 @@ fn sim_runs_are_deterministic() {
     );
 }
 
-/// The summary parser itself.
+/// The summary reader itself: one JSON object, nothing else.
 #[test]
 fn summary_parsing() {
-    let line = "nauta: run r1-2-3 sim 60.0 s mission in 0.14 s wall (438.7x) | attitude/estimate 5801 msgs 100.0 Hz | sensor/imu 6000 msgs 100.0 Hz | sensor/depth 600 msgs 10.0 Hz | sim/truth 6000 msgs 100.0 Hz | sim/truth span 59.990 s simulated in 0.120 s wall | gaps 0 | attitude error rms roll 0.140° over 5801 samples | attitude digest 6dd6335c7369c535 | all processes exited 0";
-    let s = Summary::find(&format!("noise\n{line}\n")).expect("summary");
+    let json = r#"{"namespace": "r1-2-3", "mission_s": 60.0, "messages": 12600, "gaps": 0,
+        "lost": 0, "rejected": 0,
+        "streams": {"attitude/estimate": {"messages": 5801, "rate_hz": 100.0},
+                    "sensor/imu": {"messages": 6000, "rate_hz": 100.0},
+                    "sim/truth": {"messages": 6000, "rate_hz": 100.0}},
+        "sensor_span": {"topic": "sim/truth", "simulated_s": 59.99, "wall_s": 0.12},
+        "errors": {"attitude/estimate": {"samples": 5801, "roll_rms_deg": 0.14}},
+        "digests": {"attitude/estimate": "6dd6335c7369c535"},
+        "restarts": {"attitude": 1}, "swaps": {}, "stopped": "end", "exit": "ok",
+        "failures": [], "exit_code": 0}"#;
+    let s = Summary::parse(&format!("{json}\n")).expect("summary");
     assert_eq!(s.namespace(), Some("r1-2-3"));
     assert_eq!(s.count("sensor/imu"), Some(6000));
     assert_eq!(s.count("attitude/estimate"), Some(5801));
     assert_eq!(s.count("sensor/dvl"), None);
-    assert_eq!(s.count("sensor"), None);
     assert_eq!(s.gaps(), Some(0));
-    assert_eq!(s.count("sim/truth"), Some(6000));
     assert_eq!(s.sensor_span(), Some(("sim/truth".to_owned(), 59.99, 0.12)));
     assert_eq!(s.mission_s(), Some(60.0));
     assert_eq!(s.digest().as_deref(), Some("6dd6335c7369c535"));
-    assert!(Summary::find("nauta: error: x").is_none());
+    assert_eq!(s.error("attitude/estimate", "roll_rms_deg"), Some(0.14));
+    assert_eq!((s.restarts("attitude"), s.swaps("attitude")), (1, 0));
+    assert!(s.all_exited_0());
+    assert!(Summary::parse("nauta: error: x").is_err());
+    assert!(Summary::parse(&format!("{json}\n{json}")).is_err());
+    assert!(Summary::parse("[1]").is_err());
+}
+
+/// Without `--json`, `nauta launch` prints one line with the figures of the
+/// JSON summary (the attitude digest of the earlier line is the JSON's
+/// `attitude/estimate` digest); with it, stdout is one JSON object only.
+#[test]
+fn the_summary_line_and_the_json_summary_agree() {
+    bin_dir();
+    let wd = Watchdog::new("the_summary_line_and_the_json_summary_agree", BOUND);
+    let args = ["--fast", "--duration", "30", "--seed", "5"];
+    let ns = Namespace::unique();
+    let json = launch(&wd, &[&args[..], &["--namespace", ns.as_str()]].concat());
+    let s = assert_complete_run(&json, &ns, 3000);
+    let mut plain: Vec<String> = vec!["launch".into(), survey_manifest().display().to_string()];
+    plain.extend(args.iter().map(|a| a.to_string()));
+    let line = Running::spawn(&wd, &bin("nauta"), &plain, Some(Gate::share())).wait(&wd);
+    assert_eq!(line.code(), Some(0), "{line}");
+    let text = line.stdout.trim();
+    assert!(
+        text.starts_with("nauta: run ") && !text.contains('\n'),
+        "not one summary line\n{line}"
+    );
+    let digest = s.digest().expect("digest");
+    assert!(
+        text.contains(&format!("| attitude digest {digest} |")),
+        "the line's digest is not the JSON's {digest}\n{line}"
+    );
+    assert!(
+        text.contains(&format!(
+            "| sensor/imu {} msgs",
+            s.count("sensor/imu").unwrap_or(0)
+        )),
+        "{line}"
+    );
+    assert!(text.ends_with("| all processes exited 0"), "{line}");
+    // Log lines on a pipe (here, the test's) carry no colour codes.
+    for out in [&json, &line] {
+        assert!(
+            out.stderr.contains(" INFO ") && !out.stderr.contains('\u{1b}'),
+            "escape codes (or no log) on stderr, a pipe\n{out}"
+        );
+    }
 }
 
 /// The diagnostic parser of nauta-attitude's final log line.
 #[test]
 fn attitude_gaps_parsing() {
-    let log = "\u{1b}[2m2026-11-22T15:00:25.692639Z\u{1b}[0m \u{1b}[32m INFO\u{1b}[0m \u{1b}[1mattitude\u{1b}[0m: done \u{1b}[3minputs\u{1b}[0m\u{1b}[2m=\u{1b}[0m11383 \u{1b}[3mgaps\u{1b}[0m\u{1b}[2m=\u{1b}[0m617 \u{1b}[3mby_signal\u{1b}[0m\u{1b}[2m=\u{1b}[0mfalse\n";
+    let log =
+        "2026-11-22T15:00:25.692639Z  INFO attitude: done inputs=11383 gaps=617 by_signal=false\n";
     assert_eq!(attitude_input_gaps(log), Some(617));
     assert_eq!(attitude_input_gaps("nothing"), None);
+}
+
+/// A pseudo-terminal: (master, path of the slave).
+fn open_pty() -> (std::fs::File, std::path::PathBuf) {
+    use std::os::fd::FromRawFd;
+    // SAFETY: posix_openpt returns a new descriptor we own (or -1).
+    let fd = unsafe { libc::posix_openpt(libc::O_RDWR | libc::O_NOCTTY) };
+    assert!(fd >= 0, "posix_openpt: {}", std::io::Error::last_os_error());
+    // SAFETY: `fd` is a valid pty master; `name` is large enough for ptsname_r.
+    let mut name = [0 as libc::c_char; 128];
+    let ok = unsafe {
+        libc::grantpt(fd) == 0
+            && libc::unlockpt(fd) == 0
+            && libc::ptsname_r(fd, name.as_mut_ptr(), name.len()) == 0
+    };
+    assert!(ok, "pty setup: {}", std::io::Error::last_os_error());
+    // SAFETY: ptsname_r wrote a NUL-terminated path into `name`.
+    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
+        .to_string_lossy()
+        .into_owned();
+    // SAFETY: `fd` is ours and owned by the File from here on.
+    (unsafe { std::fs::File::from_raw_fd(fd) }, path.into())
+}
+
+/// Log lines carry colour codes when stderr is a terminal, and none when
+/// `NO_COLOR` is set there too (<https://no-color.org>); on a pipe they never
+/// do (`the_summary_line_and_the_json_summary_agree`).
+#[test]
+fn log_colour_on_a_terminal_unless_no_color() {
+    use std::io::Read;
+    bin_dir();
+    let wd = Watchdog::new("log_colour_on_a_terminal", BOUND);
+    let run = |no_color: Option<&str>| -> String {
+        let (mut master, slave_path) = open_pty();
+        let slave = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&slave_path)
+            .unwrap_or_else(|e| panic!("open {}: {e}", slave_path.display()));
+        let ns = Namespace::unique();
+        let mut cmd = std::process::Command::new(bin("nauta"));
+        cmd.current_dir(workspace_root())
+            .args(["launch", &survey_manifest().display().to_string(), "--json"])
+            .args(["--fast", "--duration", "2", "--namespace", ns.as_str()])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(slave)
+            .env_remove("NO_COLOR");
+        if let Some(v) = no_color {
+            cmd.env("NO_COLOR", v);
+        }
+        let _gate = Gate::share();
+        let mut child = cmd.spawn().expect("start nauta launch");
+        wd.watch(child.id());
+        // The slave closes in this process with `cmd`; the master reads until
+        // the last process holding it (the launcher and its children) exits.
+        drop(cmd);
+        let reader = std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            let _ = master.read_to_end(&mut buf); // EIO once every writer is gone
+            String::from_utf8_lossy(&buf).into_owned()
+        });
+        let status = child.wait().expect("wait");
+        wd.unwatch(child.id());
+        let text = reader.join().expect("reader");
+        assert!(status.success(), "{status}\n{text}");
+        assert!(text.contains("INFO"), "no log on the terminal\n{text}");
+        text
+    };
+    assert!(run(None).contains('\u{1b}'), "no colour on a terminal");
+    assert!(
+        run(Some("")).contains('\u{1b}'),
+        "an empty NO_COLOR disabled colour"
+    );
+    let plain = run(Some("1"));
+    assert!(
+        !plain.contains('\u{1b}'),
+        "colour despite NO_COLOR=1\n{plain}"
+    );
 }

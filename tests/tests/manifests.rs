@@ -150,6 +150,22 @@ fn the_shipped_manifests_check() {
         let (code, out, err) = nauta(&["check", &path.display().to_string()]);
         assert_eq!(code, Some(0), "{m}: {out}{err}");
         assert!(out.contains(": ok:"), "{m}: {out}");
+        // A crashed estimator is restarted, with a cap and a backoff; the
+        // source never is (it would start its data over).
+        let manifest = nauta_runtime::Manifest::load(&path).expect("loads");
+        for (name, p) in &manifest.processes {
+            let restart = p.restart.as_ref();
+            if p.bin == "nauta-sensor" {
+                assert!(restart.is_none_or(|r| r.policy == "never"), "{m}: {name}");
+            } else {
+                let r = restart.unwrap_or_else(|| panic!("{m}: {name} has no restart policy"));
+                assert_eq!(r.policy, "on-failure", "{m}: {name}");
+                assert!(
+                    r.max.is_some() && r.backoff_ms.is_some(),
+                    "{m}: {name}: {r:?}"
+                );
+            }
+        }
     }
 }
 

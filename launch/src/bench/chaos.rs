@@ -6,9 +6,12 @@
 //! beside a run of the same mission without kills (`--fast`, deterministic).
 //!
 //! The estimators run with `restart = on-failure` and warm-start from their
-//! snapshots (docs/design-notes.md, "Supervision"). Until `nauta eval` exists
-//! (logger issue) the bench computes the error itself: it follows
-//! `attitude/estimate` and `sim/truth` and pairs them by stamp.
+//! snapshots (docs/design-notes.md, "Supervision"). Both runs are read from
+//! the launcher's JSON summary (`nauta launch --json`): the attitude error is
+//! its `errors` (`nauta eval`'s computation), the losses its `gaps` and
+//! `lost`. The bench itself follows `attitude/estimate` for what only a
+//! consumer sees: stamps missing or repeated across the restarts and each
+//! instance's first output.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -16,8 +19,6 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, bail};
-use nalgebra::{Quaternion, UnitQuaternion};
-use nauta_estimation::AttitudeError;
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
 use nauta_runtime::{ClockMode, Context, Namespace, Subscriber, services};
@@ -56,44 +57,11 @@ pub struct ChaosArgs {
     pub variant: String,
 }
 
-/// Error sums against the truth.
-#[derive(Debug, Default, Clone, Copy)]
-struct Rms {
-    n: u64,
-    sum_sq: [f64; 3],
-}
-
-impl Rms {
-    fn push(&mut self, e: &AttitudeError) {
-        self.n += 1;
-        for (s, v) in self
-            .sum_sq
-            .iter_mut()
-            .zip([e.roll_rad, e.pitch_rad, e.yaw_rad])
-        {
-            *s += v * v;
-        }
-    }
-
-    fn deg(&self) -> [f64; 3] {
-        self.sum_sq
-            .map(|s| (s / self.n.max(1) as f64).sqrt().to_degrees())
-    }
-}
-
-fn quat(q: [f64; 4]) -> UnitQuaternion<f64> {
-    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
-}
-
-/// Follows the attitude stream and the truth of the run.
+/// Follows the attitude stream and the run events.
 struct Follower {
     estimates: Subscriber<AttitudeEstimate>,
-    truth: Subscriber<TruthState>,
     events: Subscriber<RunEvent>,
-    _inboxes: [Inbox; 3],
-    truths: BTreeMap<u64, UnitQuaternion<f64>>,
-    pending: Vec<AttitudeEstimate>,
-    rms: Rms,
+    _inboxes: [Inbox; 2],
     last_stamp: Option<u64>,
     /// Stamps missing from the estimate stream (after its first).
     missing: u64,
@@ -109,16 +77,11 @@ struct Follower {
 impl Follower {
     fn new(ctx: &Context) -> anyhow::Result<Self> {
         let (estimates, a) = ctx.subscriber(&services::attitude_estimate())?;
-        let (truth, b) = ctx.subscriber(&services::truth())?;
-        let (events, c) = ctx.subscriber(&services::run_events())?;
+        let (events, b) = ctx.subscriber(&services::run_events())?;
         Ok(Self {
             estimates,
-            truth,
             events,
-            _inboxes: [a, b, c],
-            truths: BTreeMap::new(),
-            pending: Vec::new(),
-            rms: Rms::default(),
+            _inboxes: [a, b],
             last_stamp: None,
             missing: 0,
             repeated: 0,
@@ -130,57 +93,52 @@ impl Follower {
 
     fn poll(&mut self) -> anyhow::Result<()> {
         let now = Instant::now();
-        let truths = &mut self.truths;
-        self.truth.drain(|t| {
-            truths.insert(t.header.stamp_ns, quat(t.quat_nb));
-        })?;
-        let pending = &mut self.pending;
-        let first = &mut self.first_of_instance;
+        let (first, last_stamp, missing, repeated, period_ns) = (
+            &mut self.first_of_instance,
+            &mut self.last_stamp,
+            &mut self.missing,
+            &mut self.repeated,
+            self.period_ns,
+        );
         self.estimates.drain(|e| {
             first.entry(e.header.instance).or_insert(now);
-            pending.push(e);
+            let s = e.header.stamp_ns;
+            match *last_stamp {
+                Some(last) if s <= last => *repeated += 1,
+                Some(last) => *missing += (s - last) / period_ns - 1,
+                None => {}
+            }
+            *last_stamp = Some(last_stamp.map_or(s, |l| l.max(s)));
         })?;
         let seen = &mut self.events_seen;
         self.events.drain(|e| {
             seen.push((e.kind, fixed_str(&e.process), e.instance));
         })?;
-        let mut keep = Vec::new();
-        for e in std::mem::take(&mut self.pending) {
-            let s = e.header.stamp_ns;
-            match self.last_stamp {
-                Some(last) if s <= last => self.repeated += 1,
-                Some(last) => self.missing += (s - last) / self.period_ns - 1,
-                None => {}
-            }
-            self.last_stamp = Some(self.last_stamp.map_or(s, |l| l.max(s)));
-            match self.truths.get(&s) {
-                Some(t) => self.rms.push(&AttitudeError::between(&quat(e.quat_nb), t)),
-                None if self.truths.last_key_value().is_some_and(|(k, _)| *k >= s) => {}
-                None => keep.push(e),
-            }
-        }
-        self.pending = keep;
-        while self.truths.len() > 3000 {
-            self.truths.pop_first();
-        }
         Ok(())
     }
 }
 
-/// RMS roll, pitch, yaw (degrees) from a `nauta launch` summary line.
-fn summary_rms(line: &str) -> Option<[f64; 3]> {
-    let part = line
-        .split(" | ")
-        .find(|p| p.starts_with("attitude error rms"))?;
-    let num = |key: &str| -> Option<f64> {
-        let rest = part.split(key).nth(1)?.trim_start();
-        rest.split('°').next()?.trim().parse().ok()
-    };
-    Some([num("roll")?, num("pitch")?, num("yaw")?])
+/// RMS roll, pitch, yaw (degrees) of `attitude/estimate` in a JSON summary,
+/// and the samples compared.
+fn summary_rms(summary: &serde_json::Value) -> Option<([f64; 3], u64)> {
+    let e = summary.get("errors")?.get(ATTITUDE_ESTIMATE_SERVICE)?;
+    let num = |key: &str| e.get(key)?.as_f64();
+    Some((
+        [
+            num("roll_rms_deg")?,
+            num("pitch_rms_deg")?,
+            num("yaw_rms_deg")?,
+        ],
+        e.get("samples")?.as_u64()?,
+    ))
 }
 
 fn launch_args(a: &ChaosArgs, extra: &[&str]) -> Vec<String> {
-    let mut v: Vec<String> = vec!["launch".into(), a.manifest.display().to_string()];
+    let mut v: Vec<String> = vec![
+        "launch".into(),
+        a.manifest.display().to_string(),
+        "--json".into(),
+    ];
     v.extend(extra.iter().map(|s| s.to_string()));
     v.extend([
         "--seed".into(),
@@ -218,12 +176,14 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         .stderr(Stdio::null())
         .output()
         .context("cannot run the reference")?;
-    let ref_line = String::from_utf8_lossy(&reference.stdout).into_owned();
+    let ref_out = String::from_utf8_lossy(&reference.stdout).into_owned();
     anyhow::ensure!(
         reference.status.success(),
-        "the reference run failed: {ref_line}"
+        "the reference run failed: {ref_out}"
     );
-    let ref_rms = summary_rms(&ref_line).context("no attitude error in the reference summary")?;
+    let ref_summary = super::summary(&ref_out).context("the reference run")?;
+    let (ref_rms, _) =
+        summary_rms(&ref_summary).context("no attitude error in the reference summary")?;
 
     let ns = Namespace::unique();
     let mut settings = Context::settings(Role::Test);
@@ -298,14 +258,8 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         use std::io::Read;
         so.read_to_string(&mut out)?;
     }
-    let line = out
-        .lines()
-        .rev()
-        .find(|l| l.starts_with("nauta: run "))
-        .unwrap_or_default()
-        .to_owned();
+    let summary = super::summary(&out).context("the run with kills")?;
     drop(follower.estimates);
-    drop(follower.truth);
     let events = std::mem::take(&mut follower.events_seen);
     drop(follower.events);
     drop(follower._inboxes);
@@ -331,35 +285,23 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
             .iter()
             .any(|(k, p, i)| *k == event_kind::RESTARTED && p == name && *i == instance + 1)
     });
-    let rms = follower.rms.deg();
+    let completed = status.success() && summary["exit"] == "ok";
+    if !completed {
+        bail!("the run did not complete: {status}\n{summary:#}");
+    }
+    let (rms, compared) =
+        summary_rms(&summary).context("no attitude error in the summary of the run")?;
     let change = rms
         .iter()
         .zip(ref_rms)
         .map(|(k, r)| 100.0 * (k - r).abs() / r.max(1e-9))
         .fold(0.0f64, f64::max);
-    let gaps: u64 = line
-        .split(" | ")
-        .find_map(|p| p.strip_prefix("gaps ")?.trim().parse().ok())
-        .unwrap_or(u64::MAX);
-    let in_processes: u64 = line
-        .split(" | ")
-        .find_map(|p| {
-            p.strip_prefix("lost in processes ")?
-                .split(',')
-                .next()?
-                .trim()
-                .parse()
-                .ok()
-        })
-        .unwrap_or(u64::MAX);
+    let count = |key: &str| summary[key].as_u64().unwrap_or(u64::MAX);
+    let (gaps, in_processes) = (count("gaps"), count("lost"));
     let lost_estimates = follower.missing + follower.repeated;
     let lost = lost_estimates
         .saturating_add(gaps)
         .saturating_add(in_processes);
-    let completed = status.success() && line.contains("all processes exited 0");
-    if !completed {
-        bail!("the run did not complete: {status}\n{line}");
-    }
     let report = json!({
         "kills": kills.len(),
         "restarts": restarts,
@@ -375,7 +317,7 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         },
         "metric_change_pct": change,
         "attitude_rms_deg": {"with_kills": rms, "reference": ref_rms},
-        "compared_estimates": follower.rms.n,
+        "compared_estimates": compared,
         "completed": completed,
         "rate": a.rate,
         "variant": a.variant,
@@ -398,7 +340,6 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
             "attitude rms roll/pitch/yaw {:.3}/{:.3}/{:.3}° with kills vs {:.3}/{:.3}/{:.3}° without: largest change {change:.2} % (target < 10 %)",
             rms[0], rms[1], rms[2], ref_rms[0], ref_rms[1], ref_rms[2]
         );
-        println!("{line}");
     }
     Ok(())
 }

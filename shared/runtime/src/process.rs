@@ -50,18 +50,31 @@ pub struct ProcessArgs {
 }
 
 /// Installs the tracing subscriber every nauta binary uses: compact lines on
-/// stderr, level from `NAUTA_LOG` (default `info`).
+/// stderr, level from `NAUTA_LOG` (default `info`), coloured only when stderr
+/// is a terminal and `NO_COLOR` is unset or empty (see [`log_colour`]).
 pub fn init_tracing() {
     let filter = tracing_subscriber::EnvFilter::try_from_env("NAUTA_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    let colour = log_colour(
+        std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        std::env::var_os("NO_COLOR").as_deref(),
+    );
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(colour)
         .with_target(false)
         .compact()
         .try_init();
     // iceoryx2 logs on its own; keep it to real problems.
     iceoryx2::prelude::set_log_level(iceoryx2::prelude::LogLevel::Error);
+}
+
+/// Whether log lines carry ANSI colour codes: only on a terminal (a pipe or a
+/// file, such as a CI log or `2> run.log`, gets plain text), and never when
+/// `NO_COLOR` is set to a non-empty value (<https://no-color.org>).
+pub fn log_colour(stderr_is_terminal: bool, no_color: Option<&std::ffi::OsStr>) -> bool {
+    stderr_is_terminal && no_color.is_none_or(|v| v.is_empty())
 }
 
 /// The `main` of every service binary: with `--describe`, prints `describe()`;
@@ -165,5 +178,21 @@ pub fn service_main_checked(
             tracing::error!("{e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::log_colour;
+    use std::ffi::OsStr;
+
+    #[test]
+    fn colour_only_on_a_terminal_without_no_color() {
+        assert!(log_colour(true, None));
+        assert!(!log_colour(false, None), "a pipe or a file gets no colour");
+        assert!(!log_colour(true, Some(OsStr::new("1"))));
+        assert!(!log_colour(false, Some(OsStr::new("1"))));
+        // no-color.org: an empty NO_COLOR does not disable colour.
+        assert!(log_colour(true, Some(OsStr::new(""))));
     }
 }
