@@ -14,7 +14,7 @@
 //! the relay of the cycle runs as `lbl` (`lbl/nav`: `x_m`, `p[0][0]`).
 
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
@@ -22,7 +22,7 @@ use nauta_estimation::readings::{Depth, Imu, LblNav, Nav};
 use nauta_estimation::{Estimator, EstimatorError, Stamped};
 use nauta_messages::*;
 use nauta_runtime::context::ContextSettings;
-use nauta_runtime::{Context, ControlClient, Namespace, Shell, services};
+use nauta_runtime::{Connect, Context, ControlClient, Namespace, Shell, services};
 
 /// Position at t seconds, m.
 fn truth_x(t: f64) -> f64 {
@@ -438,18 +438,28 @@ struct Collected {
 fn collector(
     ns: &Namespace,
     final_instance: u32,
+    attached: &Arc<AtomicUsize>,
 ) -> (
     std::thread::JoinHandle<anyhow::Result<Collected>>,
     mpsc::Receiver<()>,
 ) {
     let ns = ns.clone();
     let (ready_tx, ready_rx) = mpsc::channel();
+    let attached = attached.clone();
     let h = std::thread::spawn(move || {
-        let ctx = Context::new(&ns, settings(Role::Test, "collector", 0))?;
+        let mut ctx = Context::new(&ns, settings(Role::Test, "collector", 0))?;
         let (mut nav, _a) = ctx.subscriber(&services::nav_solution())?;
         let (mut progress, _b) = ctx.subscriber(&services::progress(Role::Ains))?;
         let (mut health, _c) = ctx.subscriber(&services::health(Role::Ains))?;
         ready_tx.send(()).ok();
+        // Attached to the tracker's publisher before the source starts (it
+        // waits for this READY): until a subscriber attaches, iceoryx2 drops
+        // what overflows its queue without back-pressure (docs/design-notes.md,
+        // start-up order).
+        while !Connect::connect(&nav)? {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        ctx.ready();
         let mut out = Collected {
             nav: Vec::new(),
             health: None,
@@ -461,7 +471,9 @@ fn collector(
             progress.drain(|p| {
                 ended |= p.header.is_end_of_stream() && p.header.instance == final_instance
             })?;
+            let publishers = nav.publisher_count();
             nav.drain(|m| out.nav.push(m))?;
+            attached.store(publishers, Ordering::SeqCst);
             health.drain(|h| out.health = Some(h))?;
             if ended {
                 break;
@@ -533,9 +545,15 @@ fn join<T>(h: std::thread::JoinHandle<anyhow::Result<T>>, what: &str) -> T {
 /// One run of the tracker over `data` arriving as `arrival`.
 fn run_tracker(data: Vec<Out>, arrival: Arrival) -> Collected {
     let ns = Namespace::unique();
-    let (col, col_ready) = collector(&ns, 0);
+    let (col, col_ready) = collector(&ns, 0, &Arc::default());
     col_ready.recv().expect("collector started");
-    let src = source(ns.clone(), data, arrival, vec!["tracker"], None);
+    let src = source(
+        ns.clone(),
+        data,
+        arrival,
+        vec!["tracker", "collector"],
+        None,
+    );
     let trk = role(
         &ns,
         tracker_shell,
@@ -641,7 +659,8 @@ fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
     let ns = Namespace::unique();
     let data = samples(30, 3);
     let expected = reference(&data);
-    let (col, col_ready) = collector(&ns, 1);
+    let attached = Arc::new(AtomicUsize::new(0));
+    let (col, col_ready) = collector(&ns, 1, &attached);
     col_ready.recv().expect("collector started");
     let launcher =
         Context::new(&ns, settings(Role::Launcher, "launcher", 0)).expect("launcher node");
@@ -654,7 +673,7 @@ fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
         ns.clone(),
         data,
         Arrival::InOrder,
-        vec!["tracker"],
+        vec!["tracker", "collector"],
         Some((at_ns, go_rx, paused_tx)),
     );
     let first = role(
@@ -704,7 +723,9 @@ fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
                 c.snapshot_file = Some(f);
             },
         );
-        // Wait until the standby instance has caught up, then switch.
+        // Wait until the collector is attached to the new instance's
+        // publisher and the standby instance has had time to catch up.
+        wait_attached(&attached, 2);
         std::thread::sleep(Duration::from_millis(300));
         let answer = old
             .request(&launcher, request(command::DEACTIVATE, 0), timeout)
@@ -728,6 +749,7 @@ fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
             .expect("stop");
         assert_eq!(answer.status, 0);
         join(first, "instance 0");
+        attached.store(0, Ordering::SeqCst);
         // Instance 0 drained its inputs on STOP: its last output is the last
         // velocity sample before the pause (what the launcher saw last).
         boundary = (at_ns - 1) / IMU_DT_NS * IMU_DT_NS;
@@ -744,7 +766,7 @@ fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
                 c.resume_after_ns = Some(boundary);
             },
         );
-        std::thread::sleep(Duration::from_millis(300));
+        wait_attached(&attached, 1);
     }
     go_tx.send(()).expect("resume the source");
     join(src, "source");
@@ -756,6 +778,19 @@ fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
 }
 
 const SNAPSHOT_NS: u64 = 1_000_000_000;
+
+/// Waits until the collector has received with `n` publishers present
+/// (attached to each: iceoryx2 attaches on receive).
+fn wait_attached(attached: &AtomicUsize, n: usize) {
+    let t0 = Instant::now();
+    while attached.load(Ordering::SeqCst) < n {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "collector never attached to {n} publishers"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
 /// The σ a cold tracker starts with, m.
 const COLD_STD_M: f64 = 10.0;
 
@@ -895,7 +930,7 @@ fn a_wiring_cycle_runs_deterministically_without_a_round_trip_per_sample() {
     let mut digests = Vec::new();
     for arrival in [Arrival::InOrder, Arrival::SlowFirst(9)] {
         let ns = Namespace::unique();
-        let (col, col_ready) = collector(&ns, 0);
+        let (col, col_ready) = collector(&ns, 0, &Arc::default());
         col_ready.recv().expect("collector started");
         let relay_progress = {
             let ctx = Context::new(&ns, settings(Role::Test, "counter", 0)).expect("node");
@@ -906,7 +941,7 @@ fn a_wiring_cycle_runs_deterministically_without_a_round_trip_per_sample() {
             ns.clone(),
             data.clone(),
             arrival,
-            vec!["tracker", "relay"],
+            vec!["tracker", "relay", "collector"],
             None,
         );
         let trk = role(
