@@ -9,7 +9,7 @@
 //! health, its own watermark and end of stream, and answers control. The
 //! estimator itself is a pure [`Estimator`] from `nauta-estimation`.
 //!
-//! ```ignore
+//! ```text
 //! Shell::<AttitudeCore>::new(Role::Attitude, &VARIANTS)
 //!     .input(services::imu(), Role::Sensor, std::convert::identity)
 //!     .output(services::attitude_estimate(), |r| Some(AttitudeEstimate::from(r)))
@@ -254,7 +254,7 @@ where
         let (mut control, control_inbox) = ControlServer::open(ctx)?;
         inboxes.push(control_inbox);
 
-        let span = tracing::info_span!("role", role = self.role.name(), process = %ctx.process, variant = %ctx.variant);
+        let span = role_span(self.role, &ctx.process, &ctx.variant);
         let _e = span.enter();
         {
             let mut connectors: Vec<&dyn Connect> = ports.iter().map(|p| p.connector()).collect();
@@ -364,6 +364,29 @@ where
             "done"
         );
         Ok(())
+    }
+}
+
+/// The process's span, named after its role (`attitude: done ...`): span
+/// names are static, so one arm per role.
+fn role_span(role: Role, process: &str, variant: &str) -> tracing::Span {
+    macro_rules! span {
+        ($name:literal) => {
+            tracing::info_span!($name, process = %process, variant = %variant)
+        };
+    }
+    match role {
+        Role::Attitude => span!("attitude"),
+        Role::Ains => span!("ains"),
+        Role::Positioning => span!("positioning"),
+        Role::Lbl => span!("lbl"),
+        Role::Smoother => span!("smoother"),
+        Role::Sensor => span!("sensor"),
+        Role::Logger => span!("logger"),
+        Role::Launcher => span!("launcher"),
+        Role::Replay => span!("replay"),
+        Role::Test => span!("test"),
+        Role::Unknown => span!("unknown"),
     }
 }
 
