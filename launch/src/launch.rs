@@ -2,12 +2,15 @@
 
 use std::collections::BTreeMap;
 use std::ops::ControlFlow;
+use std::os::fd::AsRawFd as _;
+use std::os::unix::fs::{DirBuilderExt as _, OpenOptionsExt as _};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, bail};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
+use nauta_runtime::run_files;
 use nauta_runtime::{
     Context, ControlClient, Describe, EventLoop, LoopExit, Manifest, Namespace, PipelineServer,
     Wake, services,
@@ -70,16 +73,20 @@ pub fn cleanup_stale_runs() -> usize {
         .map(|ns| ns.remove_if_abandoned(ABANDONED_AFTER).unwrap_or(0))
         .sum();
     // Run directories (effective manifests) of runs that left nothing else.
-    if let Ok(dirs) = std::fs::read_dir(runs_dir()) {
+    let runs = run_files::runs_dir_path();
+    if run_files::check_private_dir(&runs).is_ok()
+        && let Ok(dirs) = std::fs::read_dir(&runs)
+    {
         for d in dirs.filter_map(|d| d.ok()) {
             let name = d.file_name().to_string_lossy().into_owned();
-            let old = d
-                .metadata()
-                .and_then(|m| m.modified())
-                .ok()
-                .and_then(|t| t.elapsed().ok())
-                .is_some_and(|age| age > ABANDONED_AFTER);
-            if old
+            // A launcher holds its run directory's lock while it runs.
+            let locked = std::fs::OpenOptions::new()
+                .read(true)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+                .open(d.path().join("lock"))
+                .is_ok_and(|f| !try_lock(&f));
+            if !locked
+                && is_older(&d.path(), ABANDONED_AFTER)
                 && let Ok(ns) = Namespace::new(&name)
                 && let Ok(config) = ns.config()
                 && ns.all_files(&config).is_empty()
@@ -91,9 +98,73 @@ pub fn cleanup_stale_runs() -> usize {
     removed
 }
 
-/// Where run directories (the effective manifest of each run) live.
-pub fn runs_dir() -> PathBuf {
-    std::env::temp_dir().join("nauta")
+/// Where run directories (the effective manifest of each run) live: this
+/// user's private directory (see `nauta_runtime::run_files`), created if
+/// missing; refused if another user owns it or anyone else may enter it.
+pub fn runs_dir() -> anyhow::Result<PathBuf> {
+    Ok(run_files::runs_dir()?)
+}
+
+/// The run directory of `namespace`, claimed for this launcher: created
+/// (mode 0700) with an exclusive lock held on its `lock` file for as long as
+/// the returned file is open. A directory whose lock another launcher holds
+/// means the namespace is in use: refused, as two runs in one namespace
+/// would feed each other. A directory left by a dead launcher is removed
+/// first (nothing in it is followed or reused).
+fn claim_run_dir(namespace: &Namespace) -> anyhow::Result<(PathBuf, std::fs::File)> {
+    let dir = runs_dir()?.join(namespace.as_str());
+    let lock = dir.join("lock");
+    let in_use = || {
+        anyhow::anyhow!(
+            "namespace {namespace} is in use by a running pipeline (see nauta status --namespace {namespace}); choose another --namespace or stop that run"
+        )
+    };
+    for attempt in 0..2 {
+        match std::fs::DirBuilder::new().mode(0o700).create(&dir) {
+            Ok(()) => {
+                run_files::private_dir(&dir)?;
+                let file = run_files::create_new(&lock)?;
+                if !try_lock(&file) {
+                    return Err(in_use());
+                }
+                return Ok((dir, file));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt == 0 => {
+                run_files::check_private_dir(&dir)?;
+                match std::fs::OpenOptions::new()
+                    .read(true)
+                    .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+                    .open(&lock)
+                {
+                    Ok(f) if !try_lock(&f) => return Err(in_use()),
+                    Ok(_) => {}
+                    // Being created by another launcher right now, unless old.
+                    Err(_) if !is_older(&dir, ABANDONED_AFTER) => return Err(in_use()),
+                    Err(_) => {}
+                }
+                tracing::info!(dir = %dir.display(), "removing the run directory of a run that ended");
+                std::fs::remove_dir_all(&dir)
+                    .with_context(|| format!("cannot remove {}", dir.display()))?;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Err(in_use()),
+            Err(e) => return Err(e).with_context(|| format!("cannot create {}", dir.display())),
+        }
+    }
+    Err(in_use())
+}
+
+/// An exclusive, non-blocking `flock`; false when another process holds it.
+fn try_lock(f: &std::fs::File) -> bool {
+    // SAFETY: flock(2) on a descriptor we own; released when it is closed.
+    unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) == 0 }
+}
+
+fn is_older(path: &std::path::Path, age: Duration) -> bool {
+    std::fs::symlink_metadata(path)
+        .and_then(|m| m.modified())
+        .ok()
+        .and_then(|t| t.elapsed().ok())
+        .is_some_and(|a| a > age)
 }
 
 #[derive(Clone)]
@@ -215,6 +286,7 @@ pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<P
         });
     }
     check_wiring(&manifest, &procs)?;
+    check_roles(&manifest, &procs)?;
     check_parameters(&manifest, &procs)?;
     // Sources first (in standby: see docs/design-notes.md), then consumers,
     // each after the processes its `after` names, then the logger, which
@@ -232,14 +304,46 @@ pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<P
     Ok(Plan { manifest, procs })
 }
 
+/// One process per role: services, control addresses and snapshots are per
+/// role, so two processes of one role would publish into each other's
+/// streams.
+fn check_roles(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
+    let mut by_role: BTreeMap<&str, &str> = BTreeMap::new();
+    for p in procs {
+        if let Some(first) = by_role.insert(&p.describe.role, &p.name) {
+            return Err(manifest.error_at(
+                &format!("process.{}.bin", p.name),
+                format!(
+                    "processes {first} and {} both have role {}: a run has one process per role",
+                    p.name, p.describe.role
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `--record FILE` and `nauta record -o FILE`: FILE's directory must exist
+/// (nothing creates directories on the user's behalf).
+pub fn check_output_parent(file: &std::path::Path) -> anyhow::Result<()> {
+    let parent = file
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    anyhow::ensure!(
+        parent.is_dir(),
+        "cannot record to {}: the directory {} does not exist",
+        file.display(),
+        parent.display()
+    );
+    Ok(())
+}
+
 /// Every binary checks its own parameters in the effective manifest
 /// (`--check`), so a wrong value stops the run before anything starts.
 fn check_parameters(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
-    let dir = runs_dir();
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let file = dir.join(format!("check-{}.toml", std::process::id()));
-    std::fs::write(&file, manifest.to_toml()?)
-        .with_context(|| format!("cannot write {}", file.display()))?;
+    let file = runs_dir()?.join(run_files::unique_name("check", "toml"));
+    run_files::create_file(&file, manifest.to_toml()?.as_bytes())?;
     let result = procs.iter().try_for_each(|p| {
         let variant = manifest.process(&p.name)?.variant.as_deref();
         children::check(&p.bin, &file, &p.name, variant)
@@ -250,6 +354,9 @@ fn check_parameters(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
 
 /// `nauta check`: validates only; prints one line per process.
 pub fn check(args: &LaunchArgs) -> anyhow::Result<()> {
+    if let Some(f) = &args.record {
+        check_output_parent(f)?;
+    }
     let plan = prepare(&args.manifest, &overrides(args))?;
     let m = &plan.manifest;
     println!(
@@ -290,6 +397,9 @@ pub fn check(args: &LaunchArgs) -> anyhow::Result<()> {
 
 /// Runs the pipeline; returns the process exit code.
 pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
+    if let Some(f) = &args.record {
+        check_output_parent(f)?;
+    }
     let Plan { manifest, procs } = prepare(&args.manifest, &overrides(args))?;
     let namespace = match (&args.namespace, manifest.run.namespace.as_str()) {
         (Some(ns), _) => Namespace::new(ns)?,
@@ -297,6 +407,7 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
         (None, ns) => Namespace::new(ns)?,
     };
 
+    let (run_dir, _lock) = claim_run_dir(&namespace)?;
     let removed = cleanup_stale_runs();
     if removed > 0 {
         tracing::info!(
@@ -304,11 +415,8 @@ pub fn run(args: &LaunchArgs) -> anyhow::Result<u8> {
             "removed files left by dead processes of earlier runs"
         );
     }
-    let run_dir = runs_dir().join(namespace.as_str());
-    std::fs::create_dir_all(&run_dir)
-        .with_context(|| format!("cannot create {}", run_dir.display()))?;
     let manifest_file = run_dir.join("manifest.toml");
-    std::fs::write(&manifest_file, manifest.to_toml()?)?;
+    run_files::create_file(&manifest_file, manifest.to_toml()?.as_bytes())?;
 
     let mut settings = Context::settings(Role::Launcher);
     settings.process = "launcher".into();

@@ -143,6 +143,8 @@ pub struct Observer {
     /// Per health service: the previous and the latest message, with the
     /// time each arrived (rates for `nauta status`).
     pub latest_health: std::collections::BTreeMap<String, HealthPair>,
+    /// The progress services whose end of stream was seen.
+    pub end_of_stream: std::collections::BTreeSet<String>,
 }
 
 /// A health message and when it arrived.
@@ -164,6 +166,7 @@ impl Default for Observer {
             digest: 0xcbf2_9ce4_8422_2325,
             health: Default::default(),
             latest_health: Default::default(),
+            end_of_stream: Default::default(),
         }
     }
 }
@@ -198,6 +201,7 @@ impl Observer {
         } else if let Some(p) = msg.downcast_ref::<Progress>()
             && p.header.is_end_of_stream()
         {
+            self.end_of_stream.insert(service.to_owned());
             if service == progress_service(Role::Sensor.name()) {
                 self.merge.end(TRUTH);
             } else if service == progress_service(Role::Attitude.name()) {

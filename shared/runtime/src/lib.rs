@@ -18,6 +18,7 @@ pub mod merge;
 pub mod namespace;
 pub mod ports;
 pub mod process;
+pub mod run_files;
 pub mod services;
 
 pub use clock::{ClockMode, Pacer};

@@ -279,7 +279,23 @@ impl Manifest {
                 ));
             }
         }
+        if self.processes.is_empty() {
+            return Err(anyhow::anyhow!(
+                "{}: no process: a manifest runs at least one [process.NAME] with a bin",
+                self.path.display()
+            ));
+        }
         for (name, p) in &self.processes {
+            check_process_name(name).map_err(|e| self.err(&format!("process.{name}"), e))?;
+            if let Some(flag) = p.args.iter().find_map(|a| launcher_flag(a)) {
+                return Err(self.err(
+                    &format!("process.{name}.args"),
+                    format!(
+                        "{flag} is set by the launcher (the binary contract: {}); it may not be given in args",
+                        LAUNCHER_FLAGS.join(" ")
+                    ),
+                ));
+            }
             if let Some(v) = &p.variant
                 && !p.variants.is_empty()
                 && !p.variants.contains_key(v)
@@ -442,6 +458,49 @@ impl Manifest {
         }
         toml::Table::try_into(merged).map_err(|e| self.err(&where_, e.to_string().trim_end()))
     }
+}
+
+/// Longest process name: names travel in the 32-byte fields of run events
+/// and pipeline requests.
+pub const MAX_PROCESS_NAME: usize = 32;
+
+/// The flags the launcher passes every service binary (DESIGN §5 binary
+/// contract): a process's `args` may not repeat or override them.
+pub const LAUNCHER_FLAGS: [&str; 8] = [
+    "--manifest",
+    "--process",
+    "--namespace",
+    "--instance",
+    "--variant",
+    "--standby",
+    "--snapshot",
+    "--resume-after",
+];
+
+/// The launcher flag `arg` sets (`--namespace` or `--namespace=X`), if any.
+fn launcher_flag(arg: &str) -> Option<&'static str> {
+    let flag = arg.split_once('=').map_or(arg, |(f, _)| f);
+    LAUNCHER_FLAGS.iter().copied().find(|f| *f == flag)
+}
+
+/// A process name: 1-32 bytes of A-Z, a-z, 0-9, '-' and '_' (it names
+/// files, iceoryx2 nodes and fixed-size message fields).
+fn check_process_name(name: &str) -> Result<(), String> {
+    if name.is_empty() || name.len() > MAX_PROCESS_NAME {
+        return Err(format!(
+            "a process name has 1-{MAX_PROCESS_NAME} bytes, {name:?} has {}",
+            name.len()
+        ));
+    }
+    if !name
+        .chars()
+        .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        return Err(format!(
+            "a process name uses only A-Z, a-z, 0-9, '-' and '_', not {name:?}"
+        ));
+    }
+    Ok(())
 }
 
 fn check_finite(t: &toml::Table) -> Result<(), String> {

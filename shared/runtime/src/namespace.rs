@@ -62,9 +62,18 @@ impl Namespace {
         format!("nauta_{}_", self.0)
     }
 
-    /// The iceoryx2 configuration of this run.
+    /// The iceoryx2 configuration of this run. Its files other than shared
+    /// memory live in this user's private run directory (see
+    /// [`iceoryx2_root`]), not in iceoryx2's default `/tmp/iceoryx2`, which
+    /// every user shares.
     pub fn config(&self) -> anyhow::Result<Config> {
         let mut config = Config::global_config().clone();
+        let root = iceoryx2_root()?;
+        let root = format!("{}/", root.display());
+        config.global.set_root_path(
+            &iceoryx2::prelude::Path::new(root.as_bytes())
+                .map_err(|e| anyhow::anyhow!("iceoryx2 root {root:?}: {e:?}"))?,
+        );
         config.global.prefix = FileName::new(self.prefix().as_bytes())
             .map_err(|e| anyhow::anyhow!("namespace prefix {:?}: {e:?}", self.prefix()))?;
         // Dead nodes of this run are removed whenever a node starts or a service opens.
@@ -139,6 +148,40 @@ impl Namespace {
             .count()
     }
 
+    /// Tightens what iceoryx2 allows in this run's shared memory: every
+    /// segment it creates is 0600 except its per-prefix management segment
+    /// (`…global_mgmt`), which it makes 0666 on purpose (no configuration
+    /// changes that); nauta's runs are one user's, so it is made 0600 too.
+    /// A segment of this run that another user owns means that user's run
+    /// has this namespace: refused. For a process that has just created its
+    /// node ([`crate::Context::new`]).
+    pub fn secure_shared_memory(&self) -> anyhow::Result<()> {
+        use std::os::unix::fs::{MetadataExt as _, OpenOptionsExt as _, PermissionsExt as _};
+        for name in self.shm_files() {
+            let path = std::path::Path::new("/dev/shm").join(&name);
+            let Ok(f) = std::fs::OpenOptions::new()
+                .read(true)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC | libc::O_NONBLOCK)
+                .open(&path)
+            else {
+                continue; // removed meanwhile, or not ours to open (checked below)
+            };
+            let m = f.metadata()?;
+            anyhow::ensure!(
+                m.uid() == crate::run_files::uid(),
+                "{} belongs to uid {}: another user's run uses namespace {self}; choose another --namespace",
+                path.display(),
+                m.uid()
+            );
+            // Only a segment in its final, world-accessible state: one being
+            // initialised signals readiness through its permissions.
+            if name.ends_with(".global_mgmt") && m.mode() & 0o777 == 0o666 {
+                f.set_permissions(std::fs::Permissions::from_mode(0o600))?;
+            }
+        }
+        Ok(())
+    }
+
     /// Files of this run in /dev/shm (shared memory segments), by name.
     pub fn shm_files(&self) -> Vec<String> {
         files_with_prefix("/dev/shm", &self.prefix())
@@ -149,8 +192,7 @@ impl Namespace {
     pub fn on_this_machine() -> Vec<Namespace> {
         let mut names = std::collections::BTreeSet::new();
         let mut files = files_with_prefix("/dev/shm", "nauta_");
-        let root = Config::global_config().global.root_path().to_string();
-        walk(std::path::Path::new(&root), "nauta_", &mut files);
+        walk(&iceoryx2_root_path(), "nauta_", &mut files);
         for f in files {
             let name = f.rsplit('/').next().unwrap_or(&f);
             if let Some((ns, _)) = name.strip_prefix("nauta_").and_then(|r| r.split_once('_'))
@@ -175,6 +217,21 @@ impl std::fmt::Display for Namespace {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.0)
     }
+}
+
+/// Where nauta's iceoryx2 files (node and service descriptions, event
+/// sockets) live: `.iceoryx2` in this user's private run directory (mode
+/// 0700; see [`crate::run_files`]). Not created.
+pub fn iceoryx2_root_path() -> std::path::PathBuf {
+    crate::run_files::runs_dir_path().join(".iceoryx2")
+}
+
+/// [`iceoryx2_root_path`], created and checked to be private to this user.
+pub fn iceoryx2_root() -> Result<std::path::PathBuf, crate::run_files::RunFileError> {
+    crate::run_files::runs_dir()?;
+    let root = iceoryx2_root_path();
+    crate::run_files::private_dir(&root)?;
+    Ok(root)
 }
 
 fn files_with_prefix(dir: &str, prefix: &str) -> Vec<String> {
