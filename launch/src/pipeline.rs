@@ -317,6 +317,15 @@ pub fn command(
     process: &str,
     variant: &str,
 ) -> anyhow::Result<()> {
+    // Names travel in 32-byte fields: a longer one would be cut to another
+    // process's or variant's name.
+    for (what, name) in [("process", process), ("variant", variant)] {
+        anyhow::ensure!(
+            name.len() <= nauta_runtime::manifest::MAX_PROCESS_NAME,
+            "no {what} {name:?} can exist: names have at most {} bytes",
+            nauta_runtime::manifest::MAX_PROCESS_NAME
+        );
+    }
     let run = find(namespace)?;
     let ns = Namespace::new(&run.namespace)?;
     let mut settings = Context::settings(Role::Test);
