@@ -148,6 +148,9 @@ fn check_refuses_an_empty_bin_and_a_directory() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A refused run directory: name, how to make it, what the error says.
+type Case<'a> = (&'a str, &'a dyn Fn(&Path), &'a str);
+
 /// Issue 12.2: a run directory another user owns, with a mode other than
 /// 0700, or a symlink in its place is refused by every command that uses it.
 #[test]
@@ -156,7 +159,7 @@ fn a_run_directory_of_another_user_or_with_another_mode_is_refused() {
     let survey = survey_manifest();
     // SAFETY: geteuid(2) cannot fail.
     let uid = unsafe { libc::geteuid() };
-    let cases: [(&str, &dyn Fn(&Path), &str); 3] = [
+    let cases: [Case; 3] = [
         (
             "other uid",
             &|d| {
@@ -280,7 +283,7 @@ fn the_files_of_a_running_pipeline_are_private() {
     bin_dir();
     let wd = Watchdog::new("run_file_modes", BOUND);
     let ns = Namespace::unique();
-    let mut run = start_launch(
+    let run = start_launch(
         &wd,
         &[
             "--clock",
