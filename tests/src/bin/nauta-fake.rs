@@ -63,8 +63,11 @@ fn main() -> ExitCode {
     }
 }
 
-/// Waits for the first IMU sample, then returns (exit 0).
+/// Opens its health port, waits for the first IMU sample, then returns
+/// (exit 0).
 fn exit_early(ctx: &mut Context) -> anyhow::Result<()> {
+    // The launcher taps every role's health.
+    let _health = ctx.publisher(&services::health(ctx.role))?;
     let (mut imu, inbox) = ctx.subscriber(&services::imu())?;
     if !ctx.connect_and_ready(&[&imu])? {
         return Ok(());
