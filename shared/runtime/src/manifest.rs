@@ -671,6 +671,48 @@ params = { publish = true }
     }
 
     #[test]
+    fn names_launcher_flags_and_empty_manifests_are_refused() {
+        let parse = |text: &str| {
+            Manifest::parse(Path::new("m.toml"), text)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        };
+        let at = |n: usize| {
+            GOOD.replace(
+                "[process.attitude]",
+                &format!("[process.{}]", "a".repeat(n)),
+            )
+        };
+        parse(&at(MAX_PROCESS_NAME)).expect("32 bytes");
+        let e = parse(&at(MAX_PROCESS_NAME + 1)).expect_err("33 bytes");
+        assert!(e.contains("1-32 bytes"), "{e}");
+        let e =
+            parse(&GOOD.replace("[process.attitude]", "[process.\"a/b\"]")).expect_err("a slash");
+        assert!(e.contains("only A-Z"), "{e}");
+        for arg in LAUNCHER_FLAGS {
+            for given in [arg.to_owned(), format!("{arg}=1")] {
+                let text = GOOD.replace(
+                    "variant = \"gyro\"",
+                    &format!("variant = \"gyro\"\nargs = [\"{given}\"]"),
+                );
+                let e = parse(&text).expect_err(&given);
+                assert!(
+                    e.contains("process.attitude.args") && e.contains(arg),
+                    "{given}: {e}"
+                );
+            }
+        }
+        let text = GOOD.replace(
+            "variant = \"gyro\"",
+            "variant = \"gyro\"\nargs = [\"--namespaces\"]",
+        );
+        parse(&text).expect("not a launcher flag");
+        let run_only = GOOD.split("[site]").next().unwrap_or(GOOD);
+        let e = parse(run_only).expect_err("no process");
+        assert!(e.contains("no process"), "{e}");
+    }
+
+    #[test]
     fn restart_policies_are_checked() {
         let with = |restart: &str| {
             let text = format!("{GOOD}restart = {restart}\n");
