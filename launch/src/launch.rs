@@ -33,13 +33,13 @@ pub struct LaunchArgs {
     #[arg(long, conflicts_with = "clock")]
     pub fast: bool,
     /// Pace `wall` at this multiple of real time.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rate: Option<f64>,
     /// Mission duration in simulated seconds.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub duration: Option<f64>,
-    /// Seed of every random generator of the run.
-    #[arg(long)]
+    /// Seed of every random generator of the run (0 to 2^63 - 1, as in the manifest).
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
     pub seed: Option<u64>,
     /// Run in this namespace instead of a unique one.
     #[arg(long)]
@@ -223,15 +223,27 @@ fn overrides(args: &LaunchArgs) -> Vec<String> {
         overrides.push(format!("run.clock=\"{c}\""));
     }
     if let Some(r) = args.rate {
-        overrides.push(format!("run.rate={r:?}"));
+        overrides.push(format!("run.rate={}", toml_float(r)));
     }
     if let Some(d) = args.duration {
-        overrides.push(format!("run.duration_s={d:?}"));
+        overrides.push(format!("run.duration_s={}", toml_float(d)));
     }
     if let Some(s) = args.seed {
         overrides.push(format!("run.seed={s}"));
     }
     overrides
+}
+
+/// `x` as a TOML float, so that the manifest's range check names the key
+/// (`NaN` is no TOML; `nan` is).
+fn toml_float(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{x:?}")
+    }
 }
 
 /// Reads and checks a manifest with its overrides: schema and values, every

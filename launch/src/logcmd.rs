@@ -32,7 +32,7 @@ pub struct ReplayArgs {
     /// The recording to replay.
     pub file: PathBuf,
     /// Pace at X times the recorded speed (wall clock).
-    #[arg(long, conflicts_with = "fast")]
+    #[arg(long, conflicts_with = "fast", allow_negative_numbers = true)]
     pub rate: Option<f64>,
     /// As fast as the pipeline consumes (sim clock, deterministic).
     #[arg(long)]

@@ -312,3 +312,45 @@ fn a_replay_never_records_over_its_own_input() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 12.6: values that passed `check` and then panicked the launcher or
+/// the sensor, slept forever, or read forever are refused with the key and
+/// the value; the command line's special values get a clear error instead
+/// of "unexpected argument" or a string.
+#[test]
+fn values_that_panicked_or_hung_are_refused_at_check() {
+    bin_dir();
+    let survey = survey_manifest();
+    for (args, expect) in [
+        (vec!["--rate", "1e-300"], vec!["run.rate", "1e-300"]),
+        (vec!["--rate", "-1"], vec!["run.rate", "-1"]),
+        (vec!["--rate", "nan"], vec!["run.rate", "NaN"]),
+        (vec!["--duration", "-5"], vec!["run.duration_s", "-5"]),
+        (vec!["--duration", "inf"], vec!["run.duration_s", "inf"]),
+        (
+            vec![
+                "--set",
+                "attitude.restart={ policy = \"always\", window_s = 1e300 }",
+            ],
+            vec!["process.attitude.restart.window_s", "1e300"],
+        ),
+        (
+            vec!["--seed", "18446744073709551615"],
+            vec!["--seed", "9223372036854775807"],
+        ),
+    ] {
+        let mut all = vec![os("check"), survey.as_os_str()];
+        all.extend(args.iter().map(|a| os(a)));
+        let (code, out, err) = nauta_cli(&all);
+        assert!(
+            code.is_some_and(|c| c == 1 || c == 2),
+            "{args:?}: exit {code:?}\n{out}{err}"
+        );
+        for e in expect {
+            assert!(err.contains(e), "{args:?}: the error lacks {e:?}\n{err}");
+        }
+    }
+    let (code, _, err) = nauta_cli(&[os("check"), os("/dev/zero")]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("a manifest is a regular file"), "{err}");
+}

@@ -164,8 +164,7 @@ impl Manifest {
 
     /// Reads `path`, applies `--set KEY=VALUE` overrides, and checks the result.
     pub fn load_with(path: &Path, overrides: &[String]) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read manifest {}", path.display()))?;
+        let text = read_manifest(path)?;
         let mut table: toml::Table = toml::from_str(&text)
             .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
         for o in overrides {
@@ -243,16 +242,31 @@ impl Manifest {
 
     fn check(&self) -> anyhow::Result<()> {
         let r = &self.run;
-        if !(r.duration_s > 0.0 && r.duration_s.is_finite()) {
+        if !(r.duration_s > 0.0 && r.duration_s <= MAX_DURATION_S) {
             return Err(self.err(
                 "run.duration_s",
-                format!("must be a positive number of seconds, got {}", r.duration_s),
+                format!(
+                    "must be a positive number of seconds, at most {MAX_DURATION_S}, got {:?}",
+                    r.duration_s
+                ),
             ));
         }
-        if !(r.rate > 0.0 && r.rate.is_finite()) {
+        if !(r.rate >= MIN_RATE && r.rate <= MAX_RATE) {
             return Err(self.err(
                 "run.rate",
-                format!("must be a positive number, got {}", r.rate),
+                format!(
+                    "must be a positive number in [{MIN_RATE}, {MAX_RATE}], got {:?}",
+                    r.rate
+                ),
+            ));
+        }
+        if !(r.backpressure_deadline_ms > 0 && r.backpressure_deadline_ms <= MAX_DEADLINE_MS) {
+            return Err(self.err(
+                "run.backpressure_deadline_ms",
+                format!(
+                    "must be in [1, {MAX_DEADLINE_MS}] ms, got {}",
+                    r.backpressure_deadline_ms
+                ),
             ));
         }
         ClockMode::parse(&r.clock, r.rate).map_err(|e| self.err("run.clock", e))?;
@@ -350,20 +364,26 @@ impl Manifest {
             return Err(self.err(&key("max"), "must be at least 1 (use policy = \"never\")"));
         }
         if let Some(w) = r.window_s
-            && !(w > 0.0 && w.is_finite())
+            && !(w > 0.0 && w <= MAX_WINDOW_S)
         {
             return Err(self.err(
                 &key("window_s"),
-                format!("must be a positive number of seconds, got {w}"),
+                format!("must be a number of seconds in (0, {MAX_WINDOW_S}], got {w:?}"),
             ));
         }
-        if let Some([lo, hi]) = r.backoff_ms
-            && lo > hi
-        {
-            return Err(self.err(
-                &key("backoff_ms"),
-                format!("[first, longest] must not decrease, got [{lo}, {hi}]"),
-            ));
+        if let Some([lo, hi]) = r.backoff_ms {
+            if lo > hi {
+                return Err(self.err(
+                    &key("backoff_ms"),
+                    format!("[first, longest] must not decrease, got [{lo}, {hi}]"),
+                ));
+            }
+            if hi > MAX_BACKOFF_MS {
+                return Err(self.err(
+                    &key("backoff_ms"),
+                    format!("the longest delay is at most {MAX_BACKOFF_MS} ms, got {hi}"),
+                ));
+            }
         }
         Ok(())
     }
@@ -458,6 +478,53 @@ impl Manifest {
         }
         toml::Table::try_into(merged).map_err(|e| self.err(&where_, e.to_string().trim_end()))
     }
+}
+
+/// Longest mission a manifest may ask for (`run.duration_s`): 30 days.
+pub const MAX_DURATION_S: f64 = 30.0 * 86_400.0;
+/// Slowest and fastest `wall` pacing (`run.rate`, `--rate`).
+pub const MIN_RATE: f64 = 1e-3;
+/// See [`MIN_RATE`].
+pub const MAX_RATE: f64 = 1e4;
+/// Longest back-pressure deadline (`run.backpressure_deadline_ms`): 10 min.
+pub const MAX_DEADLINE_MS: u64 = 600_000;
+/// Longest restart window (`restart.window_s`): one day.
+pub const MAX_WINDOW_S: f64 = 86_400.0;
+/// Longest restart delay (`restart.backoff_ms`): 10 min.
+pub const MAX_BACKOFF_MS: u64 = 600_000;
+/// Largest manifest file read.
+pub const MAX_MANIFEST_BYTES: u64 = 4 << 20;
+
+/// Reads a manifest file: a regular file of at most [`MAX_MANIFEST_BYTES`]
+/// (`/dev/zero` or a FIFO is refused, not read forever).
+fn read_manifest(path: &Path) -> anyhow::Result<String> {
+    use std::io::Read as _;
+    let f = std::fs::File::open(path)
+        .with_context(|| format!("cannot read manifest {}", path.display()))?;
+    let m = f
+        .metadata()
+        .with_context(|| format!("cannot read manifest {}", path.display()))?;
+    anyhow::ensure!(
+        m.is_file(),
+        "{}: a manifest is a regular file",
+        path.display()
+    );
+    anyhow::ensure!(
+        m.len() <= MAX_MANIFEST_BYTES,
+        "{}: {} bytes; a manifest has at most {MAX_MANIFEST_BYTES}",
+        path.display(),
+        m.len()
+    );
+    let mut text = String::new();
+    f.take(MAX_MANIFEST_BYTES + 1)
+        .read_to_string(&mut text)
+        .with_context(|| format!("cannot read manifest {}", path.display()))?;
+    anyhow::ensure!(
+        text.len() as u64 <= MAX_MANIFEST_BYTES,
+        "{}: a manifest has at most {MAX_MANIFEST_BYTES} bytes",
+        path.display()
+    );
+    Ok(text)
 }
 
 /// Longest process name: names travel in the 32-byte fields of run events
