@@ -154,6 +154,8 @@ pub struct Manifest {
     pub processes: BTreeMap<String, ProcessSection>,
     table: toml::Table,
     text: String,
+    /// The `--set` overrides applied, as given (`KEY=VALUE`), for errors.
+    overrides: Vec<String>,
 }
 
 impl Manifest {
@@ -171,17 +173,70 @@ impl Manifest {
             apply_override(&mut table, o)
                 .with_context(|| format!("{}: in --set {o}", path.display()))?;
         }
-        Self::from_table(path, table, text)
+        Self::from_table(path, table, text, overrides).map_err(|e| Self::locate(path, overrides, e))
+    }
+
+    /// A schema error of the manifest with overrides has no line (it comes
+    /// from the merged table, not the text): if the file alone has it, the
+    /// file's error (with line and key) is the one to report; otherwise it is
+    /// the first override that brings it, named.
+    fn locate(path: &Path, overrides: &[String], e: anyhow::Error) -> anyhow::Error {
+        let msg = e.to_string();
+        let Some(bare) = msg.strip_prefix(&format!("{}: ", path.display())) else {
+            return e;
+        };
+        if overrides.is_empty()
+            || bare.contains("--set")
+            || bare.starts_with(|c: char| c.is_ascii_digit())
+        {
+            return e;
+        }
+        let schema_of = |overrides: &[String]| -> Option<String> {
+            let text = read_manifest(path).ok()?;
+            let mut table: toml::Table = toml::from_str(&text).ok()?;
+            for o in overrides {
+                apply_override(&mut table, o).ok()?;
+            }
+            let same = toml::from_str::<toml::Table>(&text).ok()? == table;
+            let raw = if same {
+                toml::from_str::<RawManifest>(&text).map(|_| ())
+            } else {
+                toml::Table::try_into::<RawManifest>(table).map(|_| ())
+            };
+            raw.err().map(|e| e.to_string().trim_end().to_owned())
+        };
+        // The file alone.
+        if let Some(file_error) = schema_of(&[])
+            && file_error.contains(bare.lines().next().unwrap_or(bare))
+        {
+            return anyhow::anyhow!("{}: {file_error}", path.display());
+        }
+        // The first override that makes the schema fail.
+        for i in 0..overrides.len() {
+            if schema_of(&overrides[..=i]).is_some() {
+                return anyhow::anyhow!(
+                    "{}: on the command line ({}): {bare}",
+                    path.display(),
+                    overrides[i]
+                );
+            }
+        }
+        e
     }
 
     /// Parses manifest text (for tests and generated manifests).
     pub fn parse(path: &Path, text: &str) -> anyhow::Result<Self> {
         let table: toml::Table = toml::from_str(text)
             .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
-        Self::from_table(path, table, text.to_owned())
+        Self::from_table(path, table, text.to_owned(), &[])
     }
 
-    fn from_table(path: &Path, table: toml::Table, text: String) -> anyhow::Result<Self> {
+    fn from_table(
+        path: &Path,
+        table: toml::Table,
+        text: String,
+        overrides: &[String],
+    ) -> anyhow::Result<Self> {
         // Deserialize from the text when unchanged so errors carry line numbers.
         let raw: RawManifest = match toml::from_str::<toml::Table>(&text) {
             Ok(orig) if orig == table => toml::from_str(&text),
@@ -199,6 +254,7 @@ impl Manifest {
             processes: raw.process,
             table,
             text,
+            overrides: overrides.to_vec(),
         };
         m.check()?;
         Ok(m)
@@ -234,6 +290,17 @@ impl Manifest {
     }
 
     fn err(&self, key: &str, msg: impl std::fmt::Display) -> anyhow::Error {
+        // A value an override set is the override's, not the file's line's.
+        if let Some(o) = self.overrides.iter().rev().find(|o| {
+            let k = override_key(o);
+            key == k || key.starts_with(&format!("{k}."))
+        }) {
+            let k = o.split_once('=').map_or(o.as_str(), |(k, _)| k);
+            return anyhow::anyhow!(
+                "{}: {key} (set on the command line: {k}): {msg}",
+                self.path.display()
+            );
+        }
         match line_of(&self.text, key) {
             Some(line) => anyhow::anyhow!("{}:{line}: {key}: {msg}", self.path.display()),
             None => anyhow::anyhow!("{}: {key}: {msg}", self.path.display()),
@@ -611,6 +678,16 @@ fn line_of(text: &str, key: &str) -> Option<usize> {
     fallback.filter(|_| section_seen)
 }
 
+/// The full dotted key an override sets: `run.rate`, `process.NAME.KEY`
+/// (`NAME.KEY` is short for it).
+fn override_key(spec: &str) -> String {
+    let path = spec.split_once('=').map_or(spec, |(k, _)| k).trim();
+    match path.split('.').next() {
+        Some("run" | "site" | "process") => path.to_owned(),
+        _ => format!("process.{path}"),
+    }
+}
+
 /// Whether `line` sets `key` inside an inline table (`x = { key = 1 }`).
 fn sets_inline(line: &str, key: &str) -> bool {
     let Some(brace) = line.find('{') else {
@@ -780,6 +857,45 @@ params = { publish = true }
     }
 
     #[test]
+    fn errors_keep_their_place_with_overrides() {
+        let dir = std::env::temp_dir().join(format!("nauta-manifest-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let file = dir.join("m.toml");
+        let load = |text: &str, overrides: &[&str]| {
+            std::fs::write(&file, text).expect("write");
+            let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+            Manifest::load_with(&file, &o)
+                .map(|_| ())
+                .expect_err("refused")
+                .to_string()
+        };
+        let fast = ["run.clock=\"sim\""];
+        // A key of the file: its line, with overrides too.
+        let e = load(&GOOD.replace("seed = 7", "seed = 7\nsped = 3"), &fast);
+        assert!(e.contains("line 6") && e.contains("sped"), "{e}");
+        let e = load(&GOOD.replace("seed = 7", "seed = -1"), &fast);
+        assert!(e.contains("line 5") && e.contains("-1"), "{e}");
+        // A key an override brings: the override.
+        let e = load(GOOD, &["run.seed=-1"]);
+        assert!(e.contains("on the command line (run.seed=-1)"), "{e}");
+        let e = load(GOOD, &["attitude.colour=1"]);
+        assert!(
+            e.contains("attitude.colour=1") && e.contains("colour"),
+            "{e}"
+        );
+        // A value an override set out of range: the override, not a line.
+        let e = load(GOOD, &["run.rate=0.0"]);
+        assert!(
+            e.starts_with(&format!(
+                "{}: run.rate (set on the command line: run.rate)",
+                file.display()
+            )),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn restart_policies_are_checked() {
         let with = |restart: &str| {
             let text = format!("{GOOD}restart = {restart}\n");
@@ -852,7 +968,7 @@ params = { publish = true }
         apply_override(&mut t, "attitude.variants.gyro.gain=2").expect("proc");
         apply_override(&mut t, "run.clock=wall").expect("string");
         assert!(apply_override(&mut t, "nobody.x=1").is_err());
-        let m = Manifest::from_table(Path::new("m.toml"), t, String::new()).expect("valid");
+        let m = Manifest::from_table(Path::new("m.toml"), t, String::new(), &[]).expect("valid");
         assert!((m.run.duration_s - 5.0).abs() < 1e-12);
         assert_eq!(m.run.clock, "wall");
         let p: P = m.params("attitude", None).expect("params");
