@@ -79,6 +79,10 @@ pub fn cleanup_stale_runs() -> usize {
     {
         for d in dirs.filter_map(|d| d.ok()) {
             let name = d.file_name().to_string_lossy().into_owned();
+            if stale_scratch_file(&name) {
+                let _ = std::fs::remove_file(d.path());
+                continue;
+            }
             // A launcher holds its run directory's lock while it runs.
             let locked = std::fs::OpenOptions::new()
                 .read(true)
@@ -151,6 +155,21 @@ fn claim_run_dir(namespace: &Namespace) -> anyhow::Result<(PathBuf, std::fs::Fil
         }
     }
     Err(in_use())
+}
+
+/// A `check-PID-….toml` or `replay-PID-….toml` whose process is gone (it
+/// was killed before it removed the file).
+fn stale_scratch_file(name: &str) -> bool {
+    let Some(rest) = name
+        .strip_prefix("check-")
+        .or_else(|| name.strip_prefix("replay-"))
+        .filter(|_| name.ends_with(".toml"))
+    else {
+        return false;
+    };
+    let pid: Option<i32> = rest.split('-').next().and_then(|p| p.parse().ok());
+    // SAFETY: kill(2) with signal 0 only checks that the process exists.
+    pid.is_some_and(|p| p > 0 && unsafe { libc::kill(p, 0) } != 0)
 }
 
 /// An exclusive, non-blocking `flock`; false when another process holds it.
@@ -938,4 +957,22 @@ fn summary(r: &Report<'_>) -> String {
         parts.push(format!("FAILED: {}", failures.join(", ")));
     }
     parts.join(" | ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scratch_files_of_dead_processes_are_stale() {
+        let me = std::process::id();
+        assert!(!stale_scratch_file(&format!("check-{me}-1f-0.toml")));
+        assert!(!stale_scratch_file(&format!("replay-{me}-1f-0.toml")));
+        // Beyond the kernel's pid limit: no such process.
+        assert!(stale_scratch_file("check-2147483646-1f-0.toml"));
+        assert!(stale_scratch_file("replay-2147483646-1f-0.toml"));
+        assert!(!stale_scratch_file("manifest.toml"));
+        assert!(!stale_scratch_file("check-2147483646-1f-0.json"));
+        assert!(!stale_scratch_file("check-x-1f-0.toml"));
+    }
 }
