@@ -15,6 +15,7 @@ mod logcmd;
 mod monitor;
 mod pipeline;
 mod report;
+mod rundir;
 mod supervisor;
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
