@@ -14,6 +14,7 @@ pub mod describe;
 pub mod event_loop;
 pub mod health;
 pub mod manifest;
+pub mod manifest_limits;
 pub mod merge;
 pub mod namespace;
 pub mod ports;
