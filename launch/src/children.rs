@@ -58,24 +58,23 @@ fn own_dir() -> Option<PathBuf> {
         .and_then(|exe| exe.parent().map(Path::to_path_buf))
 }
 
-/// The roles nauta ships a service binary for (`nauta-<role>`).
-const SERVICE_ROLES: [Role; 7] = [
-    Role::Sensor,
-    Role::Attitude,
-    Role::Ains,
-    Role::Positioning,
-    Role::Lbl,
-    Role::Logger,
-    Role::Smoother,
-];
+/// Whether nauta ships a service binary (`nauta-<role>`) for `role`: every
+/// role but the launcher itself, replays (`nauta replay`), tests and unknown.
+fn is_service_role(role: Role) -> bool {
+    !matches!(
+        role,
+        Role::Unknown | Role::Launcher | Role::Replay | Role::Test
+    )
+}
 
 /// Finds one of nauta's own service binaries: `bin` must be `nauta-<role>`
 /// for a role nauta ships, and is taken only from beside the running
 /// `nauta` (never a path, never from PATH). What a recording's manifest may
 /// start.
 pub fn find_service_binary(bin: &str) -> anyhow::Result<PathBuf> {
-    let known: Vec<String> = SERVICE_ROLES
-        .iter()
+    let known: Vec<String> = Role::ALL
+        .into_iter()
+        .filter(|r| is_service_role(*r))
         .map(|r| format!("nauta-{}", r.name()))
         .collect();
     anyhow::ensure!(

@@ -13,24 +13,7 @@ use nauta_tests::*;
 
 const BOUND: Duration = Duration::from_secs(240);
 
-const GOOD: &str = r#"[run]
-clock = "sim"
-duration_s = 5
-seed = 3
-
-[site]
-latitude_deg = 38.6
-longitude_deg = -9.3
-magnetic_declination_deg = -0.98
-
-[process.sensor]
-bin = "nauta-sensor"
-params = { scenario = "survey" }
-
-[process.attitude]
-bin = "nauta-attitude"
-variant = "gyro"
-"#;
+const GOOD: &str = SMALL_MANIFEST;
 
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir()
@@ -62,23 +45,6 @@ fn os(s: &str) -> &OsStr {
     s.as_ref()
 }
 
-/// `nauta status --json` of the run in `ns`, once it answers.
-fn status(ns: &str) -> Option<serde_json::Value> {
-    let (code, out, _) = nauta_cli(&[os("status"), os("--json"), os("--namespace"), os(ns)]);
-    (code == Some(0)).then(|| serde_json::from_str(&out).ok())?
-}
-
-/// Pid of the running process `name` of the run in `ns`.
-fn running_pid(ns: &str, name: &str) -> Option<u32> {
-    status(ns)?["processes"]
-        .as_array()?
-        .iter()
-        .find(|p| p["name"] == name && p["state"] == "running")?["pid"]
-        .as_u64()
-        .map(|p| p as u32)
-        .filter(|p| *p > 0)
-}
-
 fn wall_run(wd: &Watchdog, ns: &Namespace, duration_s: u32, extra: &[&str]) -> Running {
     let d = duration_s.to_string();
     let mut args = vec![
@@ -107,14 +73,7 @@ fn a_second_launch_in_a_namespace_in_use_is_refused() {
     let wd = Watchdog::new("namespace_in_use", BOUND);
     let ns = Namespace::unique();
     let first = wall_run(&wd, &ns, 20, &[]);
-    assert!(
-        wait_until(&wd, Duration::from_secs(60), || running_pid(
-            ns.as_str(),
-            "attitude"
-        )
-        .is_some()),
-        "the first run never ran"
-    );
+    wait_running_pid(&wd, ns.as_str(), "attitude");
     let second = launch(
         &wd,
         &["--fast", "--duration", "5", "--namespace", ns.as_str()],
@@ -167,20 +126,13 @@ fn a_removed_run_directory_does_not_stop_the_run() {
             "attitude.restart={ policy = \"on-failure\", max = 3 }",
         ],
     );
-    let mut pid = None;
-    assert!(
-        wait_until(&wd, Duration::from_secs(60), || {
-            pid = running_pid(ns.as_str(), "attitude");
-            pid.is_some()
-        }),
-        "the attitude process never ran"
-    );
+    let pid = wait_running_pid(&wd, ns.as_str(), "attitude");
     // Past a few snapshots.
     std::thread::sleep(Duration::from_secs(2));
     std::fs::remove_dir_all(runs_dir_path().join(ns.as_str())).expect("remove the run dir");
     // SAFETY: kill(2) on the attitude process of this test's own run.
     unsafe {
-        libc::kill(pid.expect("pid") as i32, libc::SIGKILL);
+        libc::kill(pid as i32, libc::SIGKILL);
     }
     let out = run.wait(&wd);
     assert_eq!(out.code(), Some(0), "{out}");

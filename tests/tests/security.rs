@@ -263,17 +263,6 @@ fn a_symlink_planted_in_the_run_directory_is_not_followed() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `nauta status --json` of the run in `ns`, once it answers.
-fn status(ns: &str) -> Option<serde_json::Value> {
-    let (code, out, _) = nauta_cli(&[
-        "status".as_ref(),
-        "--json".as_ref(),
-        "--namespace".as_ref(),
-        ns.as_ref(),
-    ]);
-    (code == Some(0)).then(|| serde_json::from_str(&out).ok())?
-}
-
 /// Issue 12.2: the files of a running pipeline: the run directory 0700,
 /// every file in it (manifest copy, status, lock, the snapshot a restarted
 /// process gets) 0600, iceoryx2's directory 0700 and every shared-memory
@@ -303,7 +292,7 @@ fn the_files_of_a_running_pipeline_are_private() {
     // Running, and past a few snapshots.
     assert!(
         wait_until(&wd, Duration::from_secs(60), || {
-            status(ns.as_str()).is_some_and(|s| {
+            status_json(ns.as_str()).is_some_and(|s| {
                 s["processes"].as_array().is_some_and(|p| {
                     p.iter().any(|p| {
                         p["name"] == "attitude"

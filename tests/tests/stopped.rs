@@ -13,28 +13,6 @@ use nauta_tests::*;
 
 const BOUND: Duration = Duration::from_secs(240);
 
-/// `nauta status --json` of the run in `ns`, once it answers.
-fn status(ns: &str) -> Option<serde_json::Value> {
-    let (code, out, _) = nauta_cli(&[
-        "status".as_ref(),
-        "--json".as_ref(),
-        "--namespace".as_ref(),
-        ns.as_ref(),
-    ]);
-    (code == Some(0)).then(|| serde_json::from_str(&out).ok())?
-}
-
-/// Pid of the running process `name` of the run in `ns`.
-fn running_pid(ns: &str, name: &str) -> Option<u32> {
-    status(ns)?["processes"]
-        .as_array()?
-        .iter()
-        .find(|p| p["name"] == name && p["state"] == "running")?["pid"]
-        .as_u64()
-        .map(|p| p as u32)
-        .filter(|p| *p > 0)
-}
-
 #[test]
 fn sigstop_and_sigcont_of_an_estimator_do_not_end_it() {
     bin_dir();
@@ -56,15 +34,8 @@ fn sigstop_and_sigcont_of_an_estimator_do_not_end_it() {
             "attitude.variant=gyro",
         ],
     );
-    let mut pid = None;
-    assert!(
-        wait_until(&wd, Duration::from_secs(60), || {
-            pid = running_pid(ns.as_str(), "attitude");
-            pid.is_some()
-        }),
-        "the attitude process never ran"
-    );
-    let pid = pid.expect("attitude pid") as i32;
+    let pid = wait_running_pid(&wd, ns.as_str(), "attitude");
+    let pid = pid as i32;
     for _ in 0..5 {
         // SAFETY: kill(2) on the attitude process of this test's own run.
         unsafe {
@@ -118,31 +89,20 @@ fn early_manifest(restart: &str) -> PathBuf {
         .join(Namespace::unique().as_str());
     std::fs::create_dir_all(&dir).expect("dir");
     let path = dir.join("early.toml");
-    std::fs::write(
-        &path,
-        format!(
-            r#"[run]
-clock = "wall"
-rate = 10.0
-duration_s = 30
-seed = 3
-
-[site]
-latitude_deg = 38.6
-longitude_deg = -9.3
-magnetic_declination_deg = -0.98
-
-[process.sensor]
-bin = "nauta-sensor"
-params = {{ scenario = "survey" }}
-
-[process.fake]
-bin = "nauta-fake"
-{restart}
-"#
-        ),
-    )
-    .expect("manifest");
+    // The small manifest in `wall` clock at 10x for 30 s, with the fake in
+    // place of the attitude process.
+    let text = SMALL_MANIFEST
+        .replace("clock = \"sim\"", "clock = \"wall\"\nrate = 10.0")
+        .replace("duration_s = 5", "duration_s = 30")
+        .replace(
+            "[process.attitude]\nbin = \"nauta-attitude\"\nvariant = \"gyro\"\n",
+            &format!("[process.fake]\nbin = \"nauta-fake\"\n{restart}\n"),
+        );
+    assert!(
+        text.contains("nauta-fake") && text.contains("rate = 10.0"),
+        "{text}"
+    );
+    std::fs::write(&path, text).expect("manifest");
     path
 }
 
