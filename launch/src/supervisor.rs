@@ -324,6 +324,13 @@ impl Supervisor {
             }
             let code = m.child.code().unwrap_or(-1);
             publish(ctx, event_kind::EXITED, m, code);
+            // Its shared memory goes now, not at a publisher's deadline.
+            let report = ctx.cleanup_dead_nodes();
+            tracing::debug!(?report, process = %m.name, "cleaned up after exit");
+            if std::mem::take(&mut m.forced) {
+                m.pending = Some(now);
+                continue;
+            }
             // A consumer ends by itself only once its inputs ended (a
             // source's end of stream, which it saw before it exited: take
             // what the taps hold before deciding). Exit 0 before that is a
@@ -337,13 +344,6 @@ impl Supervisor {
             let m = &mut self.members[i];
             if early {
                 tracing::error!(process = %m.name, "exited 0 before its inputs ended (no end of stream seen)");
-            }
-            // Its shared memory goes now, not at a publisher's deadline.
-            let report = ctx.cleanup_dead_nodes();
-            tracing::debug!(?report, process = %m.name, "cleaned up after exit");
-            if std::mem::take(&mut m.forced) {
-                m.pending = Some(now);
-                continue;
             }
             let failed = code != 0 || early;
             let wants = match m.restart.policy {

@@ -62,18 +62,9 @@ impl Namespace {
         format!("nauta_{}_", self.0)
     }
 
-    /// The iceoryx2 configuration of this run. Its files other than shared
-    /// memory live in this user's private run directory (see
-    /// [`iceoryx2_root`]), not in iceoryx2's default `/tmp/iceoryx2`, which
-    /// every user shares.
+    /// The iceoryx2 configuration of this run.
     pub fn config(&self) -> anyhow::Result<Config> {
         let mut config = Config::global_config().clone();
-        let root = iceoryx2_root()?;
-        let root = format!("{}/", root.display());
-        config.global.set_root_path(
-            &iceoryx2::prelude::Path::new(root.as_bytes())
-                .map_err(|e| anyhow::anyhow!("iceoryx2 root {root:?}: {e:?}"))?,
-        );
         config.global.prefix = FileName::new(self.prefix().as_bytes())
             .map_err(|e| anyhow::anyhow!("namespace prefix {:?}: {e:?}", self.prefix()))?;
         // Dead nodes of this run are removed whenever a node starts or a service opens.
@@ -192,7 +183,8 @@ impl Namespace {
     pub fn on_this_machine() -> Vec<Namespace> {
         let mut names = std::collections::BTreeSet::new();
         let mut files = files_with_prefix("/dev/shm", "nauta_");
-        walk(&iceoryx2_root_path(), "nauta_", &mut files);
+        let root = Config::global_config().global.root_path().to_string();
+        walk(std::path::Path::new(&root), "nauta_", &mut files);
         for f in files {
             let name = f.rsplit('/').next().unwrap_or(&f);
             if let Some((ns, _)) = name.strip_prefix("nauta_").and_then(|r| r.split_once('_'))
@@ -217,21 +209,6 @@ impl std::fmt::Display for Namespace {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.0)
     }
-}
-
-/// Where nauta's iceoryx2 files (node and service descriptions, event
-/// sockets) live: `.iceoryx2` in this user's private run directory (mode
-/// 0700; see [`crate::run_files`]). Not created.
-pub fn iceoryx2_root_path() -> std::path::PathBuf {
-    crate::run_files::runs_dir_path().join(".iceoryx2")
-}
-
-/// [`iceoryx2_root_path`], created and checked to be private to this user.
-pub fn iceoryx2_root() -> Result<std::path::PathBuf, crate::run_files::RunFileError> {
-    crate::run_files::runs_dir()?;
-    let root = iceoryx2_root_path();
-    crate::run_files::private_dir(&root)?;
-    Ok(root)
 }
 
 fn files_with_prefix(dir: &str, prefix: &str) -> Vec<String> {
