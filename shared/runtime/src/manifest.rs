@@ -114,7 +114,8 @@ impl RestartPolicy {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProcessSection {
-    /// Binary name (`nauta-sensor`), found next to `nauta`, then on PATH.
+    /// Binary name (`nauta-sensor`), found next to `nauta`, then on PATH; a
+    /// path (with a `/`) is used as given. Not empty, not a directory.
     pub bin: String,
     /// Extra command-line arguments.
     #[serde(default)]
