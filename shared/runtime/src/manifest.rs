@@ -249,9 +249,16 @@ impl Manifest {
             _ => toml::Table::try_into(table.clone()),
         }
         .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
-        let path = match &raw.run.source {
-            Some(src) => PathBuf::from(src),
-            None => path.to_owned(),
+        // An effective manifest (written by the launcher) names the user's
+        // file: errors give that file's lines, not the copy's (none if the
+        // file cannot be read any more).
+        let (path, text) = match &raw.run.source {
+            Some(src) => {
+                let src = PathBuf::from(src);
+                let original = read_manifest(&src).unwrap_or_default();
+                (src, original)
+            }
+            None => (path.to_owned(), text),
         };
         let m = Manifest {
             path,
@@ -536,12 +543,14 @@ impl Manifest {
         let p = self.process(name)?;
         let mut merged = p.params.clone();
         let mut where_ = format!("process.{name}.params");
+        let mut from_variant = None;
         if let Some(v) = variant.or(p.variant.as_deref()) {
             if let Some(t) = p.variants.get(v) {
                 for (k, val) in t {
                     merged.insert(k.clone(), val.clone());
                 }
                 where_ = format!("process.{name}.params/variants.{v}");
+                from_variant = Some((v, t));
             } else if !p.variants.is_empty() {
                 bail!(
                     "{}: process.{name}: unknown variant {v:?}",
@@ -549,7 +558,51 @@ impl Manifest {
                 );
             }
         }
-        toml::Table::try_into(merged).map_err(|e| self.err(&where_, e.to_string().trim_end()))
+        toml::Table::try_into(merged).map_err(|e| {
+            let msg = e.to_string();
+            let msg = msg.trim_end();
+            // The key the error is about, in the table that sets it (the
+            // variant's over the common parameters), so that the error has
+            // its line (or its override).
+            let key = match param_key(msg) {
+                Some(k) => {
+                    let first = k.split('.').next().unwrap_or(&k);
+                    match from_variant {
+                        Some((v, t)) if t.contains_key(first) => {
+                            format!("process.{name}.variants.{v}.{k}")
+                        }
+                        _ if p.params.contains_key(first) => format!("process.{name}.params.{k}"),
+                        _ => where_.clone(),
+                    }
+                }
+                None => where_.clone(),
+            };
+            let first_line = msg.lines().next().unwrap_or(msg);
+            self.err(&key, first_line)
+        })
+    }
+}
+
+/// The dotted key a deserialization error of a parameter table is about:
+/// the field of "unknown field `X`" inside the table "in `P`", or the value
+/// "in `P`" itself.
+fn param_key(msg: &str) -> Option<String> {
+    let tick = |s: &str| -> Option<String> {
+        let (_, rest) = s.split_once('`')?;
+        Some(rest.split_once('`')?.0.to_owned())
+    };
+    let within = msg
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("in ").and_then(tick));
+    let first = msg.lines().next()?;
+    if first.starts_with("unknown field") {
+        let field = tick(first)?;
+        Some(match within {
+            Some(w) => format!("{w}.{field}"),
+            None => field,
+        })
+    } else {
+        within
     }
 }
 
@@ -809,6 +862,30 @@ params = { publish = true }
             "{e}"
         );
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn parameter_errors_name_their_line_and_key() {
+        let text = GOOD.replace("gain = 1.5", "gain = 1.5, colour = 1");
+        let m = Manifest::parse(Path::new("m.toml"), &text).expect("parses");
+        let e = m
+            .params::<P>("attitude", None)
+            .expect_err("unknown field")
+            .to_string();
+        assert!(
+            e.starts_with("m.toml:14: process.attitude.variants.gyro.colour: unknown field"),
+            "{e}"
+        );
+        let text = GOOD.replace("publish = true", "publish = 3");
+        let m = Manifest::parse(Path::new("m.toml"), &text).expect("parses");
+        let e = m
+            .params::<P>("attitude", None)
+            .expect_err("wrong type")
+            .to_string();
+        assert!(
+            e.starts_with("m.toml:15: process.attitude.params.publish: invalid type"),
+            "{e}"
+        );
     }
 
     #[test]
