@@ -337,6 +337,20 @@ fn the_files_of_a_running_pipeline_are_private() {
     ] {
         assert!(names.iter().any(|n| n == f), "{f} missing in {names:?}");
     }
+    // Once the restarted instance runs, no segment is being created (one
+    // being initialised is not yet readable, by design).
+    assert!(
+        wait_until(&wd, Duration::from_secs(30), || {
+            status_json(ns.as_str()).is_some_and(|s| {
+                s["processes"].as_array().is_some_and(|p| {
+                    p.iter().any(|p| {
+                        p["name"] == "attitude" && p["instance"] == 1 && p["state"] == "running"
+                    })
+                })
+            })
+        }),
+        "the restarted attitude process never ran"
+    );
     let shm = ns.shm_files();
     assert!(
         shm.iter().any(|f| f.ends_with(".global_mgmt")),
