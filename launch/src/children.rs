@@ -5,22 +5,43 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 
 use anyhow::Context as _;
+use nauta_messages::Role;
 use nauta_runtime::Describe;
 
-/// Finds `nauta-<role>` next to the running `nauta` executable, then on PATH.
+/// Finds a manifest's `bin`: a path (with a `/`) as given, a name next to the
+/// running `nauta` executable, then on PATH. Like `cargo` running a build
+/// script, `nauta check` and `nauta launch` run the binaries a user's
+/// manifest names (`--describe`, `--check`, then the run). An empty `bin`
+/// or a directory is refused.
 pub fn find_binary(bin: &str) -> anyhow::Result<PathBuf> {
-    if let Ok(exe) = std::env::current_exe()
-        && let Some(dir) = exe.parent()
-    {
+    anyhow::ensure!(
+        !bin.is_empty(),
+        "bin is empty: name a service binary (nauta-<role>) or a path to one"
+    );
+    let usable = |p: &Path| -> anyhow::Result<bool> {
+        match std::fs::metadata(p) {
+            Ok(m) if m.is_dir() => anyhow::bail!("{} is a directory, not a binary", p.display()),
+            Ok(m) => Ok(m.is_file()),
+            Err(_) => Ok(false),
+        }
+    };
+    if bin.contains('/') {
+        let p = PathBuf::from(bin);
+        if usable(&p)? {
+            return Ok(p);
+        }
+        anyhow::bail!("binary {bin:?} not found");
+    }
+    if let Some(dir) = own_dir() {
         let p = dir.join(bin);
-        if p.is_file() {
+        if usable(&p)? {
             return Ok(p);
         }
     }
     if let Some(path) = std::env::var_os("PATH") {
         for dir in std::env::split_paths(&path) {
             let p = dir.join(bin);
-            if p.is_file() {
+            if usable(&p)? {
                 return Ok(p);
             }
         }
@@ -28,6 +49,48 @@ pub fn find_binary(bin: &str) -> anyhow::Result<PathBuf> {
     anyhow::bail!(
         "binary {bin:?} not found next to nauta or on PATH (build the workspace: cargo build --release)"
     )
+}
+
+/// The directory of the running `nauta` executable.
+fn own_dir() -> Option<PathBuf> {
+    std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(Path::to_path_buf))
+}
+
+/// Whether nauta ships a service binary (`nauta-<role>`) for `role`: every
+/// role but the launcher itself, replays (`nauta replay`), tests and unknown.
+fn is_service_role(role: Role) -> bool {
+    !matches!(
+        role,
+        Role::Unknown | Role::Launcher | Role::Replay | Role::Test
+    )
+}
+
+/// Finds one of nauta's own service binaries: `bin` must be `nauta-<role>`
+/// for a role nauta ships, and is taken only from beside the running
+/// `nauta` (never a path, never from PATH). What a recording's manifest may
+/// start.
+pub fn find_service_binary(bin: &str) -> anyhow::Result<PathBuf> {
+    let known: Vec<String> = Role::ALL
+        .into_iter()
+        .filter(|r| is_service_role(*r))
+        .map(|r| format!("nauta-{}", r.name()))
+        .collect();
+    anyhow::ensure!(
+        known.iter().any(|k| k == bin),
+        "{bin:?} is not one of nauta's service binaries ({})",
+        known.join(", ")
+    );
+    let p = own_dir()
+        .map(|d| d.join(bin))
+        .context("cannot locate the nauta executable")?;
+    anyhow::ensure!(
+        p.is_file(),
+        "{} not found beside nauta (build the workspace: cargo build --release)",
+        p.display()
+    );
+    Ok(p)
 }
 
 /// Runs `bin --describe` and parses its answer.

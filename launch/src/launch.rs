@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, bail};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
+use nauta_runtime::run_files;
 use nauta_runtime::{
     Context, ControlClient, Describe, EventLoop, LoopExit, Manifest, Namespace, PipelineServer,
     Wake, services,
@@ -16,6 +17,8 @@ use nauta_runtime::{
 use crate::children;
 use crate::monitor::{self, Observer, Tap};
 use crate::pipeline::StatusWriter;
+pub use crate::rundir::runs_dir;
+use crate::rundir::{claim_run_dir, cleanup_stale_runs};
 use crate::summary::{Report, RunSummary};
 use crate::supervisor::{Outcome, Restart, Supervisor};
 
@@ -31,13 +34,13 @@ pub struct LaunchArgs {
     #[arg(long, conflicts_with = "clock")]
     pub fast: bool,
     /// Pace `wall` at this multiple of real time.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rate: Option<f64>,
     /// Mission duration in simulated seconds.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub duration: Option<f64>,
-    /// Seed of every random generator of the run.
-    #[arg(long)]
+    /// Seed of every random generator of the run (0 to 2^63 - 1, as in the manifest).
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
     pub seed: Option<u64>,
     /// Run in this namespace instead of a unique one.
     #[arg(long)]
@@ -67,46 +70,6 @@ pub struct LaunchCommand {
 const READY_TIMEOUT: Duration = Duration::from_secs(30);
 /// How long a process may take to stop after SIGTERM before it is killed.
 const STOP_TIMEOUT: Duration = Duration::from_secs(5);
-
-/// How old the newest file of a namespace without any node must be before it
-/// counts as abandoned (a run being created has fresh files and no readable
-/// node yet).
-const ABANDONED_AFTER: Duration = Duration::from_secs(10);
-
-/// Removes what dead processes of earlier runs left on this machine: the
-/// resources of dead nodes of every nauta namespace, and every file of a
-/// namespace that was abandoned (see `Namespace::remove_if_abandoned`).
-pub fn cleanup_stale_runs() -> usize {
-    let removed = Namespace::on_this_machine()
-        .into_iter()
-        .map(|ns| ns.remove_if_abandoned(ABANDONED_AFTER).unwrap_or(0))
-        .sum();
-    // Run directories (effective manifests) of runs that left nothing else.
-    if let Ok(dirs) = std::fs::read_dir(runs_dir()) {
-        for d in dirs.filter_map(|d| d.ok()) {
-            let name = d.file_name().to_string_lossy().into_owned();
-            let old = d
-                .metadata()
-                .and_then(|m| m.modified())
-                .ok()
-                .and_then(|t| t.elapsed().ok())
-                .is_some_and(|age| age > ABANDONED_AFTER);
-            if old
-                && let Ok(ns) = Namespace::new(&name)
-                && let Ok(config) = ns.config()
-                && ns.all_files(&config).is_empty()
-            {
-                let _ = std::fs::remove_dir_all(d.path());
-            }
-        }
-    }
-    removed
-}
-
-/// Where run directories (the effective manifest of each run) live.
-pub fn runs_dir() -> PathBuf {
-    std::env::temp_dir().join("nauta")
-}
 
 #[derive(Clone)]
 struct Proc {
@@ -164,15 +127,27 @@ fn overrides(args: &LaunchArgs) -> Vec<String> {
         overrides.push(format!("run.clock=\"{c}\""));
     }
     if let Some(r) = args.rate {
-        overrides.push(format!("run.rate={r:?}"));
+        overrides.push(format!("run.rate={}", toml_float(r)));
     }
     if let Some(d) = args.duration {
-        overrides.push(format!("run.duration_s={d:?}"));
+        overrides.push(format!("run.duration_s={}", toml_float(d)));
     }
     if let Some(s) = args.seed {
         overrides.push(format!("run.seed={s}"));
     }
     overrides
+}
+
+/// `x` as a TOML float, so that the manifest's range check names the key
+/// (`NaN` is no TOML; `nan` is).
+fn toml_float(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{x:?}")
+    }
 }
 
 /// Reads and checks a manifest with its overrides: schema and values, every
@@ -227,6 +202,7 @@ pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<P
         });
     }
     check_wiring(&manifest, &procs)?;
+    check_roles(&manifest, &procs)?;
     check_parameters(&manifest, &procs)?;
     // Sources first (in standby: see docs/design-notes.md), then consumers,
     // each after the processes its `after` names, then the logger, which
@@ -244,14 +220,46 @@ pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<P
     Ok(Plan { manifest, procs })
 }
 
+/// One process per role: services, control addresses and snapshots are per
+/// role, so two processes of one role would publish into each other's
+/// streams.
+fn check_roles(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
+    let mut by_role: BTreeMap<&str, &str> = BTreeMap::new();
+    for p in procs {
+        if let Some(first) = by_role.insert(&p.describe.role, &p.name) {
+            return Err(manifest.error_at(
+                &format!("process.{}.bin", p.name),
+                format!(
+                    "processes {first} and {} both have role {}: a run has one process per role",
+                    p.name, p.describe.role
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `--record FILE` and `nauta record -o FILE`: FILE's directory must exist
+/// (nothing creates directories on the user's behalf).
+pub fn check_output_parent(file: &std::path::Path) -> anyhow::Result<()> {
+    let parent = file
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    anyhow::ensure!(
+        parent.is_dir(),
+        "cannot record to {}: the directory {} does not exist",
+        file.display(),
+        parent.display()
+    );
+    Ok(())
+}
+
 /// Every binary checks its own parameters in the effective manifest
 /// (`--check`), so a wrong value stops the run before anything starts.
 fn check_parameters(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
-    let dir = runs_dir();
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let file = dir.join(format!("check-{}.toml", std::process::id()));
-    std::fs::write(&file, manifest.to_toml()?)
-        .with_context(|| format!("cannot write {}", file.display()))?;
+    let file = runs_dir()?.join(run_files::unique_name("check", "toml"));
+    run_files::create_file(&file, manifest.to_toml()?.as_bytes())?;
     let result = procs.iter().try_for_each(|p| {
         let variant = manifest.process(&p.name)?.variant.as_deref();
         children::check(&p.bin, &file, &p.name, variant)
@@ -262,6 +270,9 @@ fn check_parameters(manifest: &Manifest, procs: &[Proc]) -> anyhow::Result<()> {
 
 /// `nauta check`: validates only; prints one line per process.
 pub fn check(args: &LaunchArgs) -> anyhow::Result<()> {
+    if let Some(f) = &args.record {
+        check_output_parent(f)?;
+    }
     let plan = prepare(&args.manifest, &overrides(args))?;
     let m = &plan.manifest;
     println!(
@@ -321,6 +332,9 @@ pub fn launch(cmd: &LaunchCommand) -> anyhow::Result<u8> {
 
 /// Runs the pipeline to its end; its summary.
 fn run_to_summary(args: &LaunchArgs) -> anyhow::Result<RunSummary> {
+    if let Some(f) = &args.record {
+        check_output_parent(f)?;
+    }
     let Plan { manifest, procs } = prepare(&args.manifest, &overrides(args))?;
     let namespace = match (&args.namespace, manifest.run.namespace.as_str()) {
         (Some(ns), _) => Namespace::new(ns)?,
@@ -328,6 +342,7 @@ fn run_to_summary(args: &LaunchArgs) -> anyhow::Result<RunSummary> {
         (None, ns) => Namespace::new(ns)?,
     };
 
+    let (run_dir, _lock) = claim_run_dir(&namespace)?;
     let removed = cleanup_stale_runs();
     if removed > 0 {
         tracing::info!(
@@ -335,11 +350,8 @@ fn run_to_summary(args: &LaunchArgs) -> anyhow::Result<RunSummary> {
             "removed files left by dead processes of earlier runs"
         );
     }
-    let run_dir = runs_dir().join(namespace.as_str());
-    std::fs::create_dir_all(&run_dir)
-        .with_context(|| format!("cannot create {}", run_dir.display()))?;
     let manifest_file = run_dir.join("manifest.toml");
-    std::fs::write(&manifest_file, manifest.to_toml()?)?;
+    run_files::create_file(&manifest_file, manifest.to_toml()?.as_bytes())?;
 
     let mut settings = Context::settings(Role::Launcher);
     settings.process = "launcher".into();

@@ -1,6 +1,6 @@
 //! `nauta log info`, `nauta record`, `nauta replay`: recordings (DESIGN §8).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context as _;
@@ -32,7 +32,7 @@ pub struct ReplayArgs {
     /// The recording to replay.
     pub file: PathBuf,
     /// Pace at X times the recorded speed (wall clock).
-    #[arg(long, conflicts_with = "fast")]
+    #[arg(long, conflicts_with = "fast", allow_negative_numbers = true)]
     pub rate: Option<f64>,
     /// As fast as the pipeline consumes (sim clock, deterministic).
     #[arg(long)]
@@ -152,10 +152,15 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<ExitCode> {
 /// Ctrl-C).
 pub fn record(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     use std::os::unix::process::CommandExt as _;
+    crate::launch::check_output_parent(&args.output)?;
     let run = crate::pipeline::find(args.namespace.as_deref())?;
-    let manifest = crate::launch::runs_dir()
+    let manifest = crate::launch::runs_dir()?
         .join(&run.namespace)
         .join("manifest.toml");
+    // The logger reads it: only a file of this user, in this user's private
+    // run directory, is handed over.
+    nauta_runtime::run_files::check_private_dir(manifest.parent().unwrap_or(&manifest))?;
+    nauta_runtime::run_files::read_owned(&manifest, 64 << 20)?;
     let bin = crate::children::find_binary(crate::launch::LOGGER_BIN)?;
     eprintln!(
         "nauta: recording run {} ({}) to {}",
@@ -215,9 +220,25 @@ fn replay_manifest(args: &ReplayArgs, file: &std::path::Path) -> anyhow::Result<
             .map(str::to_owned)
     };
     processes.retain(|_, p| bin_of(p).as_deref() != Some(crate::launch::LOGGER_BIN));
+    if args.manifest.is_none() {
+        // A recording is data, not a program: its manifest may only start
+        // nauta's own service binaries, from beside this `nauta`.
+        for (name, p) in processes.iter_mut() {
+            let bin = bin_of(p).unwrap_or_default();
+            let path = crate::children::find_service_binary(&bin).with_context(|| {
+                format!(
+                    "{origin}: process.{name}.bin: refusing to run {bin:?} from a recording; give your own manifest with --manifest to run other programs"
+                )
+            })?;
+            if let Some(t) = p.as_table_mut() {
+                t.insert("bin".into(), path.display().to_string().into());
+            }
+        }
+    }
     let mut sensors = 0;
     for (_, p) in processes.iter_mut() {
-        if bin_of(p).as_deref() == Some("nauta-sensor")
+        if bin_of(p).as_deref().and_then(|b| Path::new(b).file_name())
+            == Some(std::ffi::OsStr::new("nauta-sensor"))
             && let Some(t) = p.as_table_mut()
         {
             t.insert(
@@ -234,17 +255,45 @@ fn replay_manifest(args: &ReplayArgs, file: &std::path::Path) -> anyhow::Result<
     Ok(table)
 }
 
+/// Refuses to record a replay into the recording it reads (the same path,
+/// through any link, or the same file).
+fn refuse_same_file(input: &Path, output: &Path) -> anyhow::Result<()> {
+    use std::os::unix::fs::MetadataExt as _;
+    let same_inode = match (std::fs::metadata(input), std::fs::metadata(output)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    };
+    let canonical = |p: &Path| {
+        let parent = p
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        std::fs::canonicalize(parent)
+            .ok()
+            .zip(p.file_name())
+            .map(|(d, n)| d.join(n))
+    };
+    let same_path = canonical(input).is_some_and(|a| Some(a) == canonical(output));
+    anyhow::ensure!(
+        !(same_inode || same_path),
+        "--record {} is the recording being replayed; choose another output file",
+        output.display()
+    );
+    Ok(())
+}
+
 /// `nauta replay FILE`: runs the recorded pipeline (or `--manifest`) with the
 /// sensor republishing the recording.
 pub fn replay(args: &ReplayArgs) -> anyhow::Result<ExitCode> {
     let file = std::path::absolute(&args.file)
         .with_context(|| format!("cannot resolve {}", args.file.display()))?;
+    if let Some(out) = &args.record {
+        refuse_same_file(&file, out)?;
+    }
     let table = replay_manifest(args, &file)?;
-    let dir = crate::launch::runs_dir();
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let manifest = dir.join(format!("replay-{}.toml", std::process::id()));
-    std::fs::write(&manifest, toml::to_string(&table)?)
-        .with_context(|| format!("cannot write {}", manifest.display()))?;
+    let manifest =
+        crate::launch::runs_dir()?.join(nauta_runtime::run_files::unique_name("replay", "toml"));
+    nauta_runtime::run_files::create_file(&manifest, toml::to_string(&table)?.as_bytes())?;
     let launch = crate::launch::LaunchArgs {
         manifest: manifest.clone(),
         clock: args.rate.map(|_| "wall".to_owned()),

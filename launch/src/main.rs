@@ -15,6 +15,7 @@ mod logcmd;
 mod monitor;
 mod pipeline;
 mod report;
+mod rundir;
 mod summary;
 mod supervisor;
 
@@ -29,9 +30,15 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run a pipeline from a manifest (e.g. `nauta launch launch/survey.toml --duration 60 --fast`).
+    ///
+    /// It runs the binaries the manifest names (as `cargo` runs build
+    /// scripts): launch only manifests you trust.
     Launch(launch::LaunchCommand),
-    /// Validate a manifest without starting anything: schema and values, the
+    /// Validate a manifest without starting a pipeline: schema and values, the
     /// binaries and their variants, the wiring (`nauta check launch/survey.toml`).
+    ///
+    /// It runs the binaries the manifest names (`--describe`, `--check`), as
+    /// `cargo` runs build scripts: check only manifests you trust.
     Check(launch::LaunchArgs),
     /// Processes of the running pipeline: pid, variant, state, uptime, restarts, rates, losses.
     Status {
@@ -71,6 +78,9 @@ enum Command {
     Record(logcmd::RecordArgs),
     /// Feed a recording's sensor channels into a pipeline (its recorded manifest
     /// unless `--manifest`), as the sensor process would.
+    ///
+    /// From a recorded manifest only nauta's own service binaries (beside
+    /// `nauta`) are started; anything else is refused.
     Replay(logcmd::ReplayArgs),
     /// Recordings: `nauta log info FILE [--json]`.
     Log {

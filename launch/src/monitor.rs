@@ -143,6 +143,8 @@ pub struct Observer {
     /// Per health service: the previous and the latest message, with the
     /// time each arrived (rates for `nauta status`).
     pub latest_health: BTreeMap<String, HealthPair>,
+    /// The progress services whose end of stream was seen.
+    pub end_of_stream: std::collections::BTreeSet<String>,
 }
 
 /// A health message and when it arrived.
@@ -180,6 +182,10 @@ impl Observer {
             let prev = self.latest_health.remove(service).map(|(_, last)| last);
             self.latest_health
                 .insert(service.to_owned(), (prev, (now, *h)));
+        } else if let Some(p) = (msg as &dyn Any).downcast_ref::<Progress>()
+            && p.header.is_end_of_stream()
+        {
+            self.end_of_stream.insert(service.to_owned());
         }
     }
 

@@ -2,7 +2,8 @@
 //! `nauta status`, `nauta stop`, `nauta restart P`, `nauta swap P V`.
 //!
 //! Every `nauta launch` registers its run in its run directory
-//! (`$TMPDIR/nauta/<namespace>/status.json`, rewritten every second and after
+//! (`<run directory>/<namespace>/status.json`, in this user's private
+//! run directory, see `nauta_runtime::run_files`; rewritten every second and after
 //! every change): the launcher's pid and each process's pid, variant, state,
 //! uptime, restarts and swaps (counted apart), rates and losses (from the
 //! processes' health). `status`
@@ -15,6 +16,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use anyhow::{Context as _, bail};
 use nauta_messages::*;
 use nauta_runtime::control::pipeline_control_name;
+use nauta_runtime::run_files;
 use nauta_runtime::{Context, Namespace, PipelineClient};
 use serde::{Deserialize, Serialize};
 
@@ -117,11 +119,11 @@ impl StatusWriter {
         }
         self.last = Some(Instant::now());
         let status = self.status(sup, obs);
-        let tmp = self.path.with_extension("json.tmp");
+        // A new file created exclusively and renamed over: a symlink planted
+        // at the path is replaced, never followed.
         let written = serde_json::to_vec_pretty(&status)
             .map_err(anyhow::Error::from)
-            .and_then(|b| Ok(std::fs::write(&tmp, b)?))
-            .and_then(|()| Ok(std::fs::rename(&tmp, &self.path)?));
+            .and_then(|b| Ok(run_files::replace_file(&self.path, &b)?));
         if let Err(e) = written {
             tracing::warn!(error = %e, path = %self.path.display(), "status not written");
         }
@@ -193,28 +195,54 @@ fn alive(pid: u32) -> bool {
     pid > 0 && unsafe { libc::kill(pid as i32, 0) } == 0
 }
 
-/// The runs registered on this machine whose launcher is alive.
-fn running_pipelines() -> Vec<RunStatus> {
+/// Largest `status.json` read.
+const MAX_STATUS_BYTES: u64 = 4 << 20;
+
+/// The runs this user's launchers registered on this machine whose launcher
+/// is alive. Only this user's private run directory and the directories and
+/// files in it that this user owns are trusted (anything else is skipped
+/// with a warning); a run directory that is not private is an error.
+fn running_pipelines() -> anyhow::Result<Vec<RunStatus>> {
     let mut out = Vec::new();
-    if let Ok(dirs) = std::fs::read_dir(crate::launch::runs_dir()) {
-        for d in dirs.filter_map(|d| d.ok()) {
-            let Ok(bytes) = std::fs::read(d.path().join("status.json")) else {
-                continue;
-            };
-            if let Ok(s) = serde_json::from_slice::<RunStatus>(&bytes)
-                && alive(s.launcher_pid)
+    let runs = run_files::runs_dir_path();
+    if std::fs::symlink_metadata(&runs).is_err() {
+        return Ok(out);
+    }
+    run_files::check_private_dir(&runs)?;
+    let dirs =
+        std::fs::read_dir(&runs).with_context(|| format!("cannot read {}", runs.display()))?;
+    for d in dirs.filter_map(|d| d.ok()) {
+        let path = d.path();
+        if Namespace::new(&d.file_name().to_string_lossy()).is_err() {
+            continue;
+        }
+        let read = run_files::check_private_dir(&path)
+            .and_then(|()| run_files::read_owned(&path.join("status.json"), MAX_STATUS_BYTES));
+        let bytes = match read {
+            Ok(b) => b,
+            Err(run_files::RunFileError::Io { source, .. })
+                if source.kind() == std::io::ErrorKind::NotFound =>
             {
-                out.push(s);
+                continue;
             }
+            Err(e) => {
+                tracing::warn!("{e}; skipped");
+                continue;
+            }
+        };
+        if let Ok(s) = serde_json::from_slice::<RunStatus>(&bytes)
+            && alive(s.launcher_pid)
+        {
+            out.push(s);
         }
     }
     out.sort_by(|a, b| a.started_unix_s.total_cmp(&b.started_unix_s));
-    out
+    Ok(out)
 }
 
 /// The running pipeline named `namespace`, or the only one.
 pub fn find(namespace: Option<&str>) -> anyhow::Result<RunStatus> {
-    let runs = running_pipelines();
+    let runs = running_pipelines()?;
     match namespace {
         Some(ns) => runs
             .into_iter()
@@ -292,6 +320,15 @@ pub fn command(
     process: &str,
     variant: &str,
 ) -> anyhow::Result<()> {
+    // Names travel in 32-byte fields: a longer one would be cut to another
+    // process's or variant's name.
+    for (what, name) in [("process", process), ("variant", variant)] {
+        anyhow::ensure!(
+            name.len() <= nauta_runtime::manifest::MAX_PROCESS_NAME,
+            "no {what} {name:?} can exist: names have at most {} bytes",
+            nauta_runtime::manifest::MAX_PROCESS_NAME
+        );
+    }
     let run = find(namespace)?;
     let ns = Namespace::new(&run.namespace)?;
     let mut settings = Context::settings(Role::Test);

@@ -172,6 +172,8 @@ pub struct Supervisor {
     /// Instances replaced by a swap, until they have exited: (child, since).
     retiring: Vec<(Running, Instant)>,
     manifest_file: PathBuf,
+    /// The effective manifest, to restore it if the run directory is removed.
+    manifest_text: Vec<u8>,
     run_dir: PathBuf,
     namespace: String,
 }
@@ -183,6 +185,8 @@ impl Supervisor {
             members: Vec::new(),
             retiring: Vec::new(),
             manifest_file: manifest_file.to_owned(),
+            manifest_text: nauta_runtime::run_files::read_owned(manifest_file, 64 << 20)
+                .unwrap_or_default(),
             run_dir: run_dir.to_owned(),
             namespace: namespace.to_owned(),
         }
@@ -305,6 +309,12 @@ impl Supervisor {
             .members
             .iter_mut()
             .any(|m| m.source && m.child.poll() && m.child.code() == Some(0));
+        let sources: Vec<String> = self
+            .members
+            .iter()
+            .filter(|m| m.source)
+            .map(|m| progress_service(m.role.name()))
+            .collect();
         let now = Instant::now();
         for i in 0..self.members.len() {
             let m = &mut self.members[i];
@@ -321,15 +331,35 @@ impl Supervisor {
                 m.pending = Some(now);
                 continue;
             }
+            // A consumer ends by itself only once its inputs ended (a
+            // source's end of stream, which it saw before it exited: take
+            // what the taps hold before deciding). Exit 0 before that is a
+            // failure, not the end of the run.
+            let early = code == 0 && !m.source && !inputs_ended(&sources, obs) && {
+                for t in taps.iter_mut() {
+                    t.drain(obs)?;
+                }
+                !inputs_ended(&sources, obs)
+            };
+            let m = &mut self.members[i];
+            if early {
+                tracing::error!(process = %m.name, "exited 0 before its inputs ended (no end of stream seen)");
+            }
+            let failed = code != 0 || early;
             let wants = match m.restart.policy {
                 RestartPolicy::Never => false,
-                RestartPolicy::OnFailure => code != 0,
+                RestartPolicy::OnFailure => failed,
                 RestartPolicy::Always => true,
+            };
+            let why = if early {
+                format!("{} exited 0 before its inputs ended", m.name)
+            } else {
+                format!("{} exited {code}", m.name)
             };
             if !wants || draining || m.source {
                 m.settled = true;
-                if code != 0 {
-                    m.failure = Some(format!("{} exited {code}", m.name));
+                if failed {
+                    m.failure = Some(why);
                 }
                 continue;
             }
@@ -343,8 +373,8 @@ impl Supervisor {
             if m.recent.len() as u32 >= m.restart.max {
                 m.settled = true;
                 m.failure = Some(format!(
-                    "{} exited {code} and was restarted {} times within {:?}",
-                    m.name, m.restart.max, m.restart.window
+                    "{why} and was restarted {} times within {:?}",
+                    m.restart.max, m.restart.window
                 ));
                 continue;
             }
@@ -396,6 +426,7 @@ impl Supervisor {
         let now = Instant::now();
         for i in 0..self.members.len() {
             if let Some(variant) = self.members[i].swap_request.take() {
+                self.restore_run_files();
                 let m = &self.members[i];
                 let snapshot = latest_snapshot(&self.run_dir, m, taps)?;
                 let instance = m.instance + 1;
@@ -577,6 +608,7 @@ impl Supervisor {
         i: usize,
         taps: &[Box<dyn Tap>],
     ) -> anyhow::Result<()> {
+        self.restore_run_files();
         let m = &mut self.members[i];
         m.pending = None;
         let file = latest_snapshot(&self.run_dir, m, taps)?;
@@ -608,6 +640,30 @@ impl Supervisor {
     }
 }
 
+impl Supervisor {
+    /// The run directory and the effective manifest a new instance reads,
+    /// recreated if something removed them (a temp cleaner): logged, and the
+    /// run goes on.
+    fn restore_run_files(&self) {
+        if std::fs::symlink_metadata(&self.manifest_file).is_ok() {
+            return;
+        }
+        let restored = nauta_runtime::run_files::runs_dir()
+            .and_then(|_| nauta_runtime::run_files::private_dir(&self.run_dir))
+            .and_then(|()| {
+                nauta_runtime::run_files::create_file(&self.manifest_file, &self.manifest_text)
+            });
+        match restored {
+            Ok(()) => {
+                tracing::warn!(dir = %self.run_dir.display(), "the run directory was removed; recreated it")
+            }
+            Err(e) => {
+                tracing::error!(error = %e, "the run directory was removed and cannot be recreated")
+            }
+        }
+    }
+}
+
 /// Writes the role's latest snapshot (as the launcher's tap kept it) to a
 /// file in the run directory for a new instance; None if there is none yet.
 fn latest_snapshot(
@@ -624,9 +680,24 @@ fn latest_snapshot(
         return Ok(None);
     };
     let path = run_dir.join(format!("snapshot-{}-{}.bin", m.name, m.instance + 1));
-    std::fs::write(&path, bytes)?;
+    // Exclusively created and renamed over (mode 0600): a file or symlink
+    // already at the path is replaced, never followed.
+    if let Err(e) = nauta_runtime::run_files::replace_file(&path, bytes) {
+        // A temp cleaner may have removed the run directory: the run goes on,
+        // the new instance starts cold.
+        tracing::error!(process = %m.name, error = %e, "snapshot not written; the new instance starts without it");
+        return Ok(None);
+    }
     tracing::info!(process = %m.name, snapshot_stamp_ns = stamp, "warm start from the latest snapshot");
     Ok(Some(path))
+}
+
+/// Whether a source of the run has ended its stream (its end-of-stream
+/// progress reached the launcher's tap).
+fn inputs_ended(source_progress: &[String], obs: &Observer) -> bool {
+    source_progress
+        .iter()
+        .any(|s| obs.end_of_stream.contains(s))
 }
 
 fn control(command: u32, boundary_stamp_ns: u64) -> ControlRequest {

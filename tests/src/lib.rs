@@ -698,3 +698,65 @@ pub fn nauta_cli(args: &[&std::ffi::OsStr]) -> (Option<i32>, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+// ---------------------------------------------------------------------------
+// A running pipeline, through the command line
+// ---------------------------------------------------------------------------
+
+/// `nauta status --json --namespace NS`, once the run answers.
+pub fn status_json(ns: &str) -> Option<serde_json::Value> {
+    let (code, out, _) = nauta_cli(&[
+        "status".as_ref(),
+        "--json".as_ref(),
+        "--namespace".as_ref(),
+        ns.as_ref(),
+    ]);
+    (code == Some(0)).then(|| serde_json::from_str(&out).ok())?
+}
+
+/// Pid of process `name` of the run in `ns` while `nauta status` shows it
+/// running.
+pub fn running_pid(ns: &str, name: &str) -> Option<u32> {
+    status_json(ns)?["processes"]
+        .as_array()?
+        .iter()
+        .find(|p| p["name"] == name && p["state"] == "running")?["pid"]
+        .as_u64()
+        .map(|p| p as u32)
+        .filter(|p| *p > 0)
+}
+
+/// A small valid manifest: 5 s of the survey in `sim` clock, the sensor
+/// and the attitude process (`gyro`).
+pub const SMALL_MANIFEST: &str = r#"[run]
+clock = "sim"
+duration_s = 5
+seed = 3
+
+[site]
+latitude_deg = 38.6
+longitude_deg = -9.3
+magnetic_declination_deg = -0.98
+
+[process.sensor]
+bin = "nauta-sensor"
+params = { scenario = "survey" }
+
+[process.attitude]
+bin = "nauta-attitude"
+variant = "gyro"
+"#;
+
+/// Waits (up to a minute) until `nauta status` shows process `name` of the
+/// run in `ns` running; its pid. Panics if it never does.
+pub fn wait_running_pid(wd: &Watchdog, ns: &str, name: &str) -> u32 {
+    let mut pid = None;
+    assert!(
+        wait_until(wd, Duration::from_secs(60), || {
+            pid = running_pid(ns, name);
+            pid.is_some()
+        }),
+        "process {name} of run {ns} never ran"
+    );
+    pid.unwrap_or_else(|| panic!("process {name} of run {ns}: no pid"))
+}

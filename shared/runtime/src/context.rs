@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context as _;
 use iceoryx2::config::Config;
+use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::BackpressureAction;
 use iceoryx2::port::backpressure_strategy::BackpressureStrategy;
 use iceoryx2::prelude::*;
@@ -137,6 +138,7 @@ impl Context {
             .config(&config)
             .create::<Ipc>()
             .map_err(|e| anyhow::anyhow!("cannot create the iceoryx2 node of {name}: {e:?}"))?;
+        namespace.secure_shared_memory()?;
         let mut ctx = Context {
             node,
             config,
@@ -398,8 +400,12 @@ impl Context {
     }
 
     /// Checks for SIGINT/SIGTERM without blocking (for sources that never wait).
+    /// An interrupted wait (EINTR) is not a termination request.
     pub fn termination_requested(&self) -> bool {
-        self.node.wait(Duration::ZERO).is_err()
+        matches!(
+            self.node.wait(Duration::ZERO),
+            Err(NodeWaitFailure::TerminationRequest)
+        )
     }
 
     /// Leaves the run: drops the node and, if this was the last live node of the
@@ -413,9 +419,17 @@ impl Context {
         }
     }
 
-    /// Sleeps up to `d`, returning false when a termination signal arrived.
+    /// Sleeps up to `d`, returning false when a termination signal (SIGINT,
+    /// SIGTERM) arrived. A sleep interrupted by another signal (EINTR:
+    /// SIGSTOP/SIGCONT, SIGCHLD, a debugger) ends early and returns true.
     pub fn sleep(&self, d: Duration) -> bool {
-        self.node.wait(d).is_ok()
+        match self.node.wait(d) {
+            Ok(()) => true,
+            Err(NodeWaitFailure::TerminationRequest) => false,
+            // iceoryx2 keeps a SIGINT/SIGTERM that interrupted the sleep:
+            // the next check reports it.
+            Err(NodeWaitFailure::Interrupt) => !self.termination_requested(),
+        }
     }
 }
 

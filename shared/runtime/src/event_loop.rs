@@ -82,9 +82,12 @@ impl EventLoop {
                 })
                 .map_err(|e| anyhow::anyhow!("WaitSet failed: {e:?}"))?;
             match result {
-                WaitSetRunResult::TerminationRequest | WaitSetRunResult::Interrupt => {
-                    return Ok(LoopExit::Signal);
-                }
+                WaitSetRunResult::TerminationRequest => return Ok(LoopExit::Signal),
+                // The wait was interrupted (EINTR: SIGSTOP/SIGCONT, SIGCHLD, a
+                // debugger). That is no request to end: wait again. A SIGINT
+                // or SIGTERM that interrupted it is reported by the next wait
+                // as a termination request (iceoryx2 keeps the signal).
+                WaitSetRunResult::Interrupt => continue,
                 WaitSetRunResult::AllEventsHandled | WaitSetRunResult::StopRequest => {}
             }
             if data {

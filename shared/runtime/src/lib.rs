@@ -15,10 +15,12 @@ pub mod describe;
 pub mod event_loop;
 pub mod health;
 pub mod manifest;
+pub mod manifest_limits;
 pub mod merge;
 pub mod namespace;
 pub mod ports;
 pub mod process;
+pub mod run_files;
 pub mod services;
 pub mod shell;
 

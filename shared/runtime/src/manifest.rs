@@ -11,6 +11,11 @@ use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
 use crate::clock::ClockMode;
+pub use crate::manifest_limits::{
+    LAUNCHER_FLAGS, MAX_BACKOFF_MS, MAX_DEADLINE_MS, MAX_DURATION_S, MAX_MANIFEST_BYTES,
+    MAX_PROCESS_NAME, MAX_RATE, MAX_WINDOW_S, MIN_RATE,
+};
+use crate::manifest_limits::{check_process_name, launcher_flag, read_manifest};
 
 /// `[run]`.
 #[derive(Debug, Clone, Deserialize)]
@@ -109,7 +114,8 @@ impl RestartPolicy {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProcessSection {
-    /// Binary name (`nauta-sensor`), found next to `nauta`, then on PATH.
+    /// Binary name (`nauta-sensor`), found next to `nauta`, then on PATH; a
+    /// path (with a `/`) is used as given. Not empty, not a directory.
     pub bin: String,
     /// Extra command-line arguments.
     #[serde(default)]
@@ -154,6 +160,8 @@ pub struct Manifest {
     pub processes: BTreeMap<String, ProcessSection>,
     table: toml::Table,
     text: String,
+    /// The `--set` overrides applied, as given (`KEY=VALUE`), for errors.
+    overrides: Vec<String>,
 }
 
 impl Manifest {
@@ -164,34 +172,93 @@ impl Manifest {
 
     /// Reads `path`, applies `--set KEY=VALUE` overrides, and checks the result.
     pub fn load_with(path: &Path, overrides: &[String]) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read manifest {}", path.display()))?;
+        let text = read_manifest(path)?;
         let mut table: toml::Table = toml::from_str(&text)
             .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
         for o in overrides {
             apply_override(&mut table, o)
                 .with_context(|| format!("{}: in --set {o}", path.display()))?;
         }
-        Self::from_table(path, table, text)
+        Self::from_table(path, table, text, overrides).map_err(|e| Self::locate(path, overrides, e))
+    }
+
+    /// A schema error of the manifest with overrides has no line (it comes
+    /// from the merged table, not the text): if the file alone has it, the
+    /// file's error (with line and key) is the one to report; otherwise it is
+    /// the first override that brings it, named.
+    fn locate(path: &Path, overrides: &[String], e: anyhow::Error) -> anyhow::Error {
+        let msg = e.to_string();
+        let Some(bare) = msg.strip_prefix(&format!("{}: ", path.display())) else {
+            return e;
+        };
+        if overrides.is_empty()
+            || bare.contains("--set")
+            || bare.starts_with(|c: char| c.is_ascii_digit())
+        {
+            return e;
+        }
+        let schema_of = |overrides: &[String]| -> Option<String> {
+            let text = read_manifest(path).ok()?;
+            let mut table: toml::Table = toml::from_str(&text).ok()?;
+            for o in overrides {
+                apply_override(&mut table, o).ok()?;
+            }
+            let same = toml::from_str::<toml::Table>(&text).ok()? == table;
+            let raw = if same {
+                toml::from_str::<RawManifest>(&text).map(|_| ())
+            } else {
+                toml::Table::try_into::<RawManifest>(table).map(|_| ())
+            };
+            raw.err().map(|e| e.to_string().trim_end().to_owned())
+        };
+        // The file alone.
+        if let Some(file_error) = schema_of(&[])
+            && file_error.contains(bare.lines().next().unwrap_or(bare))
+        {
+            return anyhow::anyhow!("{}: {file_error}", path.display());
+        }
+        // The first override that makes the schema fail.
+        for i in 0..overrides.len() {
+            if schema_of(&overrides[..=i]).is_some() {
+                return anyhow::anyhow!(
+                    "{}: on the command line ({}): {bare}",
+                    path.display(),
+                    overrides[i]
+                );
+            }
+        }
+        e
     }
 
     /// Parses manifest text (for tests and generated manifests).
     pub fn parse(path: &Path, text: &str) -> anyhow::Result<Self> {
         let table: toml::Table = toml::from_str(text)
             .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
-        Self::from_table(path, table, text.to_owned())
+        Self::from_table(path, table, text.to_owned(), &[])
     }
 
-    fn from_table(path: &Path, table: toml::Table, text: String) -> anyhow::Result<Self> {
+    fn from_table(
+        path: &Path,
+        table: toml::Table,
+        text: String,
+        overrides: &[String],
+    ) -> anyhow::Result<Self> {
         // Deserialize from the text when unchanged so errors carry line numbers.
         let raw: RawManifest = match toml::from_str::<toml::Table>(&text) {
             Ok(orig) if orig == table => toml::from_str(&text),
             _ => toml::Table::try_into(table.clone()),
         }
         .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
-        let path = match &raw.run.source {
-            Some(src) => PathBuf::from(src),
-            None => path.to_owned(),
+        // An effective manifest (written by the launcher) names the user's
+        // file: errors give that file's lines, not the copy's (none if the
+        // file cannot be read any more).
+        let (path, text) = match &raw.run.source {
+            Some(src) => {
+                let src = PathBuf::from(src);
+                let original = read_manifest(&src).unwrap_or_default();
+                (src, original)
+            }
+            None => (path.to_owned(), text),
         };
         let m = Manifest {
             path,
@@ -200,6 +267,7 @@ impl Manifest {
             processes: raw.process,
             table,
             text,
+            overrides: overrides.to_vec(),
         };
         m.check()?;
         Ok(m)
@@ -235,6 +303,17 @@ impl Manifest {
     }
 
     fn err(&self, key: &str, msg: impl std::fmt::Display) -> anyhow::Error {
+        // A value an override set is the override's, not the file's line's.
+        if let Some(o) = self.overrides.iter().rev().find(|o| {
+            let k = override_key(o);
+            key == k || key.starts_with(&format!("{k}."))
+        }) {
+            let k = o.split_once('=').map_or(o.as_str(), |(k, _)| k);
+            return anyhow::anyhow!(
+                "{}: {key} (set on the command line: {k}): {msg}",
+                self.path.display()
+            );
+        }
         match line_of(&self.text, key) {
             Some(line) => anyhow::anyhow!("{}:{line}: {key}: {msg}", self.path.display()),
             None => anyhow::anyhow!("{}: {key}: {msg}", self.path.display()),
@@ -243,16 +322,31 @@ impl Manifest {
 
     fn check(&self) -> anyhow::Result<()> {
         let r = &self.run;
-        if !(r.duration_s > 0.0 && r.duration_s.is_finite()) {
+        if !(r.duration_s > 0.0 && r.duration_s <= MAX_DURATION_S) {
             return Err(self.err(
                 "run.duration_s",
-                format!("must be a positive number of seconds, got {}", r.duration_s),
+                format!(
+                    "must be a positive number of seconds, at most {MAX_DURATION_S}, got {:?}",
+                    r.duration_s
+                ),
             ));
         }
-        if !(r.rate > 0.0 && r.rate.is_finite()) {
+        if !(r.rate >= MIN_RATE && r.rate <= MAX_RATE) {
             return Err(self.err(
                 "run.rate",
-                format!("must be a positive number, got {}", r.rate),
+                format!(
+                    "must be a positive number in [{MIN_RATE}, {MAX_RATE}], got {:?}",
+                    r.rate
+                ),
+            ));
+        }
+        if !(r.backpressure_deadline_ms > 0 && r.backpressure_deadline_ms <= MAX_DEADLINE_MS) {
+            return Err(self.err(
+                "run.backpressure_deadline_ms",
+                format!(
+                    "must be in [1, {MAX_DEADLINE_MS}] ms, got {}",
+                    r.backpressure_deadline_ms
+                ),
             ));
         }
         ClockMode::parse(&r.clock, r.rate).map_err(|e| self.err("run.clock", e))?;
@@ -279,7 +373,23 @@ impl Manifest {
                 ));
             }
         }
+        if self.processes.is_empty() {
+            return Err(anyhow::anyhow!(
+                "{}: no process: a manifest runs at least one [process.NAME] with a bin",
+                self.path.display()
+            ));
+        }
         for (name, p) in &self.processes {
+            check_process_name(name).map_err(|e| self.err(&format!("process.{name}"), e))?;
+            if let Some(flag) = p.args.iter().find_map(|a| launcher_flag(a)) {
+                return Err(self.err(
+                    &format!("process.{name}.args"),
+                    format!(
+                        "{flag} is set by the launcher (the binary contract: {}); it may not be given in args",
+                        LAUNCHER_FLAGS.join(" ")
+                    ),
+                ));
+            }
             if let Some(v) = &p.variant
                 && !p.variants.is_empty()
                 && !p.variants.contains_key(v)
@@ -334,20 +444,26 @@ impl Manifest {
             return Err(self.err(&key("max"), "must be at least 1 (use policy = \"never\")"));
         }
         if let Some(w) = r.window_s
-            && !(w > 0.0 && w.is_finite())
+            && !(w > 0.0 && w <= MAX_WINDOW_S)
         {
             return Err(self.err(
                 &key("window_s"),
-                format!("must be a positive number of seconds, got {w}"),
+                format!("must be a number of seconds in (0, {MAX_WINDOW_S}], got {w:?}"),
             ));
         }
-        if let Some([lo, hi]) = r.backoff_ms
-            && lo > hi
-        {
-            return Err(self.err(
-                &key("backoff_ms"),
-                format!("[first, longest] must not decrease, got [{lo}, {hi}]"),
-            ));
+        if let Some([lo, hi]) = r.backoff_ms {
+            if lo > hi {
+                return Err(self.err(
+                    &key("backoff_ms"),
+                    format!("[first, longest] must not decrease, got [{lo}, {hi}]"),
+                ));
+            }
+            if hi > MAX_BACKOFF_MS {
+                return Err(self.err(
+                    &key("backoff_ms"),
+                    format!("the longest delay is at most {MAX_BACKOFF_MS} ms, got {hi}"),
+                ));
+            }
         }
         Ok(())
     }
@@ -427,12 +543,14 @@ impl Manifest {
         let p = self.process(name)?;
         let mut merged = p.params.clone();
         let mut where_ = format!("process.{name}.params");
+        let mut from_variant = None;
         if let Some(v) = variant.or(p.variant.as_deref()) {
             if let Some(t) = p.variants.get(v) {
                 for (k, val) in t {
                     merged.insert(k.clone(), val.clone());
                 }
                 where_ = format!("process.{name}.params/variants.{v}");
+                from_variant = Some((v, t));
             } else if !p.variants.is_empty() {
                 bail!(
                     "{}: process.{name}: unknown variant {v:?}",
@@ -440,7 +558,51 @@ impl Manifest {
                 );
             }
         }
-        toml::Table::try_into(merged).map_err(|e| self.err(&where_, e.to_string().trim_end()))
+        toml::Table::try_into(merged).map_err(|e| {
+            let msg = e.to_string();
+            let msg = msg.trim_end();
+            // The key the error is about, in the table that sets it (the
+            // variant's over the common parameters), so that the error has
+            // its line (or its override).
+            let key = match param_key(msg) {
+                Some(k) => {
+                    let first = k.split('.').next().unwrap_or(&k);
+                    match from_variant {
+                        Some((v, t)) if t.contains_key(first) => {
+                            format!("process.{name}.variants.{v}.{k}")
+                        }
+                        _ if p.params.contains_key(first) => format!("process.{name}.params.{k}"),
+                        _ => where_.clone(),
+                    }
+                }
+                None => where_.clone(),
+            };
+            let first_line = msg.lines().next().unwrap_or(msg);
+            self.err(&key, first_line)
+        })
+    }
+}
+
+/// The dotted key a deserialization error of a parameter table is about:
+/// the field of "unknown field `X`" inside the table "in `P`", or the value
+/// "in `P`" itself.
+fn param_key(msg: &str) -> Option<String> {
+    let tick = |s: &str| -> Option<String> {
+        let (_, rest) = s.split_once('`')?;
+        Some(rest.split_once('`')?.0.to_owned())
+    };
+    let within = msg
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("in ").and_then(tick));
+    let first = msg.lines().next()?;
+    if first.starts_with("unknown field") {
+        let field = tick(first)?;
+        Some(match within {
+            Some(w) => format!("{w}.{field}"),
+            None => field,
+        })
+    } else {
+        within
     }
 }
 
@@ -483,6 +645,16 @@ fn line_of(text: &str, key: &str) -> Option<usize> {
         }
     }
     fallback.filter(|_| section_seen)
+}
+
+/// The full dotted key an override sets: `run.rate`, `process.NAME.KEY`
+/// (`NAME.KEY` is short for it).
+fn override_key(spec: &str) -> String {
+    let path = spec.split_once('=').map_or(spec, |(k, _)| k).trim();
+    match path.split('.').next() {
+        Some("run" | "site" | "process") => path.to_owned(),
+        _ => format!("process.{path}"),
+    }
 }
 
 /// Whether `line` sets `key` inside an inline table (`x = { key = 1 }`).
@@ -612,6 +784,111 @@ params = { publish = true }
     }
 
     #[test]
+    fn names_launcher_flags_and_empty_manifests_are_refused() {
+        let parse = |text: &str| {
+            Manifest::parse(Path::new("m.toml"), text)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        };
+        let at = |n: usize| {
+            GOOD.replace(
+                "[process.attitude]",
+                &format!("[process.{}]", "a".repeat(n)),
+            )
+        };
+        parse(&at(MAX_PROCESS_NAME)).expect("32 bytes");
+        let e = parse(&at(MAX_PROCESS_NAME + 1)).expect_err("33 bytes");
+        assert!(e.contains("1-32 bytes"), "{e}");
+        let e =
+            parse(&GOOD.replace("[process.attitude]", "[process.\"a/b\"]")).expect_err("a slash");
+        assert!(e.contains("only A-Z"), "{e}");
+        for arg in LAUNCHER_FLAGS {
+            for given in [arg.to_owned(), format!("{arg}=1")] {
+                let text = GOOD.replace(
+                    "variant = \"gyro\"",
+                    &format!("variant = \"gyro\"\nargs = [\"{given}\"]"),
+                );
+                let e = parse(&text).expect_err(&given);
+                assert!(
+                    e.contains("process.attitude.args") && e.contains(arg),
+                    "{given}: {e}"
+                );
+            }
+        }
+        let text = GOOD.replace(
+            "variant = \"gyro\"",
+            "variant = \"gyro\"\nargs = [\"--namespaces\"]",
+        );
+        parse(&text).expect("not a launcher flag");
+        let run_only = GOOD.split("[site]").next().unwrap_or(GOOD);
+        let e = parse(run_only).expect_err("no process");
+        assert!(e.contains("no process"), "{e}");
+    }
+
+    #[test]
+    fn errors_keep_their_place_with_overrides() {
+        let dir = std::env::temp_dir().join(format!("nauta-manifest-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let file = dir.join("m.toml");
+        let load = |text: &str, overrides: &[&str]| {
+            std::fs::write(&file, text).expect("write");
+            let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+            Manifest::load_with(&file, &o)
+                .map(|_| ())
+                .expect_err("refused")
+                .to_string()
+        };
+        let fast = ["run.clock=\"sim\""];
+        // A key of the file: its line, with overrides too.
+        let e = load(&GOOD.replace("seed = 7", "seed = 7\nsped = 3"), &fast);
+        assert!(e.contains("line 6") && e.contains("sped"), "{e}");
+        let e = load(&GOOD.replace("seed = 7", "seed = -1"), &fast);
+        assert!(e.contains("line 5") && e.contains("-1"), "{e}");
+        // A key an override brings: the override.
+        let e = load(GOOD, &["run.seed=-1"]);
+        assert!(e.contains("on the command line (run.seed=-1)"), "{e}");
+        let e = load(GOOD, &["attitude.colour=1"]);
+        assert!(
+            e.contains("attitude.colour=1") && e.contains("colour"),
+            "{e}"
+        );
+        // A value an override set out of range: the override, not a line.
+        let e = load(GOOD, &["run.rate=0.0"]);
+        assert!(
+            e.starts_with(&format!(
+                "{}: run.rate (set on the command line: run.rate)",
+                file.display()
+            )),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn parameter_errors_name_their_line_and_key() {
+        let text = GOOD.replace("gain = 1.5", "gain = 1.5, colour = 1");
+        let m = Manifest::parse(Path::new("m.toml"), &text).expect("parses");
+        let e = m
+            .params::<P>("attitude", None)
+            .expect_err("unknown field")
+            .to_string();
+        assert!(
+            e.starts_with("m.toml:14: process.attitude.variants.gyro.colour: unknown field"),
+            "{e}"
+        );
+        let text = GOOD.replace("publish = true", "publish = 3");
+        let m = Manifest::parse(Path::new("m.toml"), &text).expect("parses");
+        let e = m
+            .params::<P>("attitude", None)
+            .expect_err("wrong type")
+            .to_string();
+        assert!(
+            e.starts_with("m.toml:15: process.attitude.params.publish: invalid type"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn restart_policies_are_checked() {
         let with = |restart: &str| {
             let text = format!("{GOOD}restart = {restart}\n");
@@ -684,7 +961,7 @@ params = { publish = true }
         apply_override(&mut t, "attitude.variants.gyro.gain=2").expect("proc");
         apply_override(&mut t, "run.clock=wall").expect("string");
         assert!(apply_override(&mut t, "nobody.x=1").is_err());
-        let m = Manifest::from_table(Path::new("m.toml"), t, String::new()).expect("valid");
+        let m = Manifest::from_table(Path::new("m.toml"), t, String::new(), &[]).expect("valid");
         assert!((m.run.duration_s - 5.0).abs() < 1e-12);
         assert_eq!(m.run.clock, "wall");
         let p: P = m.params("attitude", None).expect("params");

@@ -139,6 +139,40 @@ impl Namespace {
             .count()
     }
 
+    /// Tightens what iceoryx2 allows in this run's shared memory: every
+    /// segment it creates is 0600 except its per-prefix management segment
+    /// (`…global_mgmt`), which it makes 0666 on purpose (no configuration
+    /// changes that); nauta's runs are one user's, so it is made 0600 too.
+    /// A segment of this run that another user owns means that user's run
+    /// has this namespace: refused. For a process that has just created its
+    /// node ([`crate::Context::new`]).
+    pub fn secure_shared_memory(&self) -> anyhow::Result<()> {
+        use std::os::unix::fs::{MetadataExt as _, OpenOptionsExt as _, PermissionsExt as _};
+        for name in self.shm_files() {
+            let path = std::path::Path::new("/dev/shm").join(&name);
+            let Ok(f) = std::fs::OpenOptions::new()
+                .read(true)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC | libc::O_NONBLOCK)
+                .open(&path)
+            else {
+                continue; // removed meanwhile, or not ours to open (checked below)
+            };
+            let m = f.metadata()?;
+            anyhow::ensure!(
+                m.uid() == crate::run_files::uid(),
+                "{} belongs to uid {}: another user's run uses namespace {self}; choose another --namespace",
+                path.display(),
+                m.uid()
+            );
+            // Only a segment in its final, world-accessible state: one being
+            // initialised signals readiness through its permissions.
+            if name.ends_with(".global_mgmt") && m.mode() & 0o777 == 0o666 {
+                f.set_permissions(std::fs::Permissions::from_mode(0o600))?;
+            }
+        }
+        Ok(())
+    }
+
     /// Files of this run in /dev/shm (shared memory segments), by name.
     pub fn shm_files(&self) -> Vec<String> {
         files_with_prefix("/dev/shm", &self.prefix())
