@@ -110,6 +110,7 @@ fn launch_early(wd: &Watchdog, restart: &str) -> Finished {
         &manifest.display().to_string(),
         "--namespace",
         ns.as_str(),
+        "--json",
     ])
     .env("NAUTA_FAKE_DESCRIBE", EARLY)
     .env("NAUTA_FAKE_RUN", "exit-early");
