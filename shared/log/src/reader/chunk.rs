@@ -18,9 +18,11 @@ pub const MAX_CHUNK_BYTES: u64 = 256 << 20;
 
 /// The most a chunk may expand when decompressed (declared uncompressed size
 /// over compressed size), beyond a 1 MiB allowance. nauta's recordings
-/// expand 2-9x (docs/design-notes.md, "Reading damaged recordings"); zstd can
-/// reach 30,000x on runs of one byte, which no recording holds.
-pub const MAX_EXPANSION: u64 = 200;
+/// expand 2.5x, their Foxglove exports (JSON) 4-6x (docs/design-notes.md,
+/// "Reading damaged recordings"); zstd reaches thousands on runs of one byte,
+/// which no recording holds. 32x also bounds what a hostile file can make a
+/// reader hold: 32 times its own size.
+pub const MAX_EXPANSION: u64 = 32;
 
 /// Why a chunk was skipped.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
