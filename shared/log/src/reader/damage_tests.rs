@@ -288,10 +288,21 @@ fn a_damaged_chunk_length_resumes_at_the_next_intact_chunk() {
 }
 
 #[test]
-fn a_truncated_attachment_does_not_panic() {
-    // The mcap crate sliced an attachment body `..len - 4` before checking
-    // its length: a 2-byte attachment record panicked. It is skipped unread.
-    let bytes = file(&[record(0x09, &[1, 2]), plain_chunk(&imu_records(0, 3, true))]);
+fn an_attachment_cut_before_its_crc_does_not_panic() {
+    // The mcap crate sliced an attachment's data `..len - 4` before it checked
+    // that the 4-byte CRC was there: a complete header with a 2-byte tail
+    // panicked. Attachments are skipped unread.
+    let mut attachment = Vec::new();
+    attachment.extend_from_slice(&0u64.to_le_bytes()); // log time
+    attachment.extend_from_slice(&0u64.to_le_bytes()); // create time
+    attachment.extend(string("a"));
+    attachment.extend(string("text/plain"));
+    attachment.extend_from_slice(&0u64.to_le_bytes()); // data length
+    attachment.extend_from_slice(&[0, 0]);
+    let bytes = file(&[
+        record(0x09, &attachment),
+        plain_chunk(&imu_records(0, 3, true)),
+    ]);
     let (recovery, got) = read_file(&bytes);
     assert_eq!(got, samples(0..3));
     assert!(recovery.damaged.is_empty());
