@@ -27,6 +27,7 @@ use crate::schema::Schema;
 
 pub mod chunk;
 pub mod records;
+mod summary;
 
 use records::{Record, op};
 
@@ -383,6 +384,9 @@ struct Walk<F> {
     rec: Recording,
     schemas: BTreeMap<u16, (String, Option<Schema>)>,
     on_message: F,
+    /// The channels of the file's summary section (CRC-checked), for
+    /// messages whose own channel record was lost with a damaged chunk.
+    summary: BTreeMap<u16, Channel>,
 }
 
 fn walk<S, P, F>(
@@ -412,6 +416,7 @@ where
         },
         schemas: BTreeMap::new(),
         on_message,
+        summary: summary::channels(src, file_bytes)?,
     };
     let mut body = Vec::new();
     let mut chunk_data = Vec::new();
@@ -536,8 +541,14 @@ where
                 publish_time,
                 data,
             } => {
-                // A message whose channel record was lost cannot be
-                // interpreted (MCAP writes a channel before its first message).
+                // A message whose channel record was lost is interpreted by
+                // the summary's channel, or not at all (MCAP writes a channel
+                // before its first message).
+                if !rec.channels.contains_key(&channel_id)
+                    && let Some(ch) = self.summary.remove(&channel_id)
+                {
+                    rec.channels.insert(channel_id, ch);
+                }
                 match rec.channels.get(&channel_id) {
                     Some(ch) => (self.on_message)(
                         ch,

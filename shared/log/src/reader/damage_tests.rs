@@ -8,6 +8,8 @@ use nauta_messages::*;
 use rand::{Rng as _, SeedableRng as _};
 use rand_chacha::ChaCha8Rng;
 
+use std::path::Path;
+
 use super::records::op;
 use super::*;
 
@@ -308,14 +310,10 @@ fn an_attachment_cut_before_its_crc_does_not_panic() {
     assert!(recovery.damaged.is_empty());
 }
 
-fn below(rng: &mut ChaCha8Rng, n: usize) -> usize {
-    rng.random_range(0..n.max(1))
-}
-
-#[test]
-fn damaged_copies_of_a_real_recording_never_deliver_a_changed_message() {
-    let dir = tempfile::tempdir().expect("tmp");
-    let path = dir.path().join("w.mcap");
+/// A finished file of `n` IMU samples in 8 KiB chunks (the first chunk
+/// announces the schema and channel; the summary repeats them).
+fn finished_recording(dir: &Path, n: u64) -> Vec<u8> {
+    let path = dir.join("w.mcap");
     let mut w = crate::LogWriter::create(
         &path,
         crate::WriterOptions {
@@ -324,12 +322,65 @@ fn damaged_copies_of_a_real_recording_never_deliver_a_changed_message() {
         },
     )
     .expect("create");
-    for i in 0..2_000 {
+    for i in 0..n {
         w.write_message("sensor/imu", 1_000 + i, &imu(i))
             .expect("write");
     }
     w.finish().expect("finish");
-    let original = std::fs::read(&path).expect("read");
+    std::fs::read(&path).expect("read")
+}
+
+/// (offset, record length) of every top-level chunk record.
+fn chunk_records(bytes: &[u8]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut at = MAGIC.len();
+    while at + 9 <= bytes.len() && bytes[at] != op::DATA_END {
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().expect("8")) as usize;
+        if bytes[at] == op::CHUNK {
+            out.push((at, 9 + len));
+        }
+        at += 9 + len;
+    }
+    out
+}
+
+#[test]
+fn a_damaged_first_chunk_loses_no_channel_of_a_finished_file() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let original = finished_recording(dir.path(), 2_000);
+    let chunks = chunk_records(&original);
+    assert!(chunks.len() > 3, "{chunks:?}");
+    let (first, len) = chunks[0];
+    let mut bytes = original.clone();
+    bytes[first + len - 50] ^= 0x04;
+    // The channel comes from the summary (its CRC checked): every message
+    // of the other chunks is read, none of the damaged one.
+    let (recovery, got) = read_file(&bytes);
+    assert_eq!(recovery.damaged.len(), 1, "{recovery:?}");
+    assert_eq!(recovery.damaged[0].chunk, Some(0));
+    assert_eq!(recovery.unknown_channel_messages, 0);
+    let lost = 2_000 - got.len() as u64;
+    assert!(
+        lost > 0 && got == samples(lost..2_000),
+        "{} read",
+        got.len()
+    );
+    // A damaged summary is not used: the messages are counted, not guessed.
+    let summary_byte = original.len() - 8 - 29 - 20;
+    bytes[summary_byte] ^= 0x01;
+    let (recovery, got) = read_file(&bytes);
+    assert!(got.is_empty());
+    assert_eq!(recovery.unknown_channel_messages, 2_000 - lost);
+}
+
+fn below(rng: &mut ChaCha8Rng, n: usize) -> usize {
+    rng.random_range(0..n.max(1))
+}
+
+#[test]
+fn damaged_copies_of_a_real_recording_never_deliver_a_changed_message() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let original = finished_recording(dir.path(), 2_000);
     let all = samples(0..2_000);
     let mut rng = ChaCha8Rng::seed_from_u64(12);
     for case in 0..200 {

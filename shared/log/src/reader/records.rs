@@ -16,6 +16,8 @@ use std::collections::BTreeMap;
 pub mod op {
     /// Header: profile, library.
     pub const HEADER: u8 = 0x01;
+    /// Footer: summary start, summary offset start, summary CRC.
+    pub const FOOTER: u8 = 0x02;
     /// Schema: id, name, encoding, data.
     pub const SCHEMA: u8 = 0x03;
     /// Channel: id, schema id, topic, message encoding, metadata.
