@@ -132,6 +132,7 @@ pub fn notes(data: &Data, eval: &Evaluation) -> Vec<String> {
             eval.file
         ));
     }
+    notes.extend(data.damage.iter().cloned());
     for (topic, why) in &eval.skipped {
         notes.push(format!("{topic} not evaluated: {why}"));
     }

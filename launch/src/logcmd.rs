@@ -95,9 +95,12 @@ pub fn info(args: &InfoArgs) -> anyhow::Result<ExitCode> {
     }
     if r.damaged_chunks > 0 {
         println!(
-            "  DAMAGED: {} chunks could not be decoded",
+            "  DAMAGED: {} chunks skipped (nothing in them used)",
             r.damaged_chunks
         );
+    }
+    for note in r.damage_notes() {
+        println!("    {note}");
     }
     println!(
         "  span {:.3} s .. {:.3} s ({:.1} s), {} messages, {} gaps",
@@ -194,6 +197,9 @@ fn replay_manifest(args: &ReplayArgs, file: &std::path::Path) -> anyhow::Result<
         ),
         None => {
             let rec = nauta_log::read(file, |_, _| Ok(()))?;
+            for note in rec.recovery.damage_notes() {
+                eprintln!("nauta replay: note: {note}");
+            }
             let text = rec
                 .metadata(nauta_log::META_RUN)
                 .and_then(|m| m.get("manifest"))

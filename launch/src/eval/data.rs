@@ -180,6 +180,9 @@ pub struct Data {
     pub first_stamp_ns: u64,
     /// The file was cut short (logger killed): what it holds is read.
     pub truncated: bool,
+    /// The damaged chunks that were skipped, one line each (and messages
+    /// whose channel was lost with one).
+    pub damage: Vec<String>,
 }
 
 impl Data {
@@ -199,6 +202,7 @@ impl Data {
             d.first_stamp_ns = 0;
         }
         d.truncated = rec.recovery.truncated;
+        d.damage = rec.recovery.damage_notes();
         d.run = run_info::from_metadata(rec.metadata(nauta_log::META_RUN));
         d.truth.sort_by_key(|t| t.stamp_ns);
         d.truth.dedup_by_key(|t| t.stamp_ns);

@@ -48,6 +48,9 @@ pub fn load(path: &Path) -> anyhow::Result<Replay> {
             "the recording was cut short; replaying its complete part"
         );
     }
+    for note in rec.recovery.damage_notes() {
+        tracing::warn!(file = %path.display(), "{note}");
+    }
     anyhow::ensure!(
         !tagged.is_empty(),
         "{} holds no sensor channel to replay",

@@ -8,7 +8,7 @@ use std::path::Path;
 use nauta_messages::{GapCounter, RunEvent, codec, event_kind, fixed_str};
 use serde::Serialize;
 
-use crate::reader::{self, Recovery};
+use crate::reader::{self, Channel, RecordedMessage, Recovery};
 
 /// One channel's summary.
 #[derive(Debug, Clone, Default, Serialize)]
@@ -98,6 +98,24 @@ fn kind_name(kind: u32) -> String {
 
 /// Reads `path` and summarises it; `on_progress(bytes read, file bytes)`.
 pub fn summarise(path: &Path, on_progress: impl FnMut(u64, u64)) -> anyhow::Result<LogInfo> {
+    summarise_with(path.display().to_string(), |on_message| {
+        reader::read_with_progress(path, on_progress, on_message)
+    })
+}
+
+/// [`summarise`] of a recording held in memory, named `file`.
+pub fn summarise_bytes(file: &str, bytes: &[u8]) -> anyhow::Result<LogInfo> {
+    summarise_with(file.to_owned(), |on_message| {
+        reader::read_bytes(bytes, |_, _| {}, on_message)
+    })
+}
+
+type OnMessage<'a> = &'a mut dyn FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>;
+
+fn summarise_with(
+    file: String,
+    read: impl FnOnce(OnMessage<'_>) -> anyhow::Result<reader::Recording>,
+) -> anyhow::Result<LogInfo> {
     struct Acc {
         summary: ChannelSummary,
         gaps: GapCounter,
@@ -105,7 +123,7 @@ pub fn summarise(path: &Path, on_progress: impl FnMut(u64, u64)) -> anyhow::Resu
     }
     let mut acc: BTreeMap<u16, Acc> = BTreeMap::new();
     let mut events = Vec::new();
-    let rec = reader::read_with_progress(path, on_progress, |ch, m| {
+    let rec = read(&mut |ch, m| {
         let a = acc.entry(ch.id).or_insert_with(|| Acc {
             summary: ChannelSummary {
                 topic: ch.topic.clone(),
@@ -178,7 +196,7 @@ pub fn summarise(path: &Path, on_progress: impl FnMut(u64, u64)) -> anyhow::Resu
         .unwrap_or(0);
     let end = with_data.map(|c| c.last_stamp_ns).max().unwrap_or(0);
     Ok(LogInfo {
-        file: path.display().to_string(),
+        file,
         messages: channels.iter().map(|c| c.count).sum(),
         gaps: channels.iter().map(|c| c.gaps).sum(),
         channels,

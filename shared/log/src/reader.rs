@@ -1,21 +1,38 @@
-//! Reading a recording, whole or cut short.
+//! Reading a recording, whole, cut short or damaged.
 //!
 //! The reader walks the file record by record (MCAP: opcode, 64-bit length,
-//! body) instead of trusting its summary, so a file whose writer died keeps
-//! everything up to its last complete record: every complete chunk is read back,
-//! and [`Recovery`] says where the file ends and how many bytes after that were
-//! lost. A chunk that is complete but damaged (bad compression stream) is
-//! skipped and counted; reading goes on with the next one.
+//! body) instead of trusting its summary, and parses every record itself
+//! ([`records`]) with each length checked against the bytes that hold it
+//! before anything is allocated, so no file can make it panic or allocate
+//! more than its own size (and [`chunk::MAX_CHUNK_BYTES`] per chunk).
+//!
+//! - A file whose writer died keeps everything up to its last complete
+//!   record: every complete chunk is read back, and [`Recovery`] says where
+//!   the file ends and how many bytes after that were lost.
+//! - A chunk is decompressed to at most the size it declares, its CRC
+//!   verified and all its records parsed before any is used ([`chunk`]); a
+//!   chunk that fails is skipped whole, counted and named ([`Damage`]: its
+//!   offset and index), and reading goes on with the next record.
+//! - Bytes that are not a record (a damaged opcode or length) are skipped up
+//!   to the next record that is consistent with its length (a chunk, a
+//!   metadata record or the data end), also named as a [`Damage`].
 
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::{BufReader, Read};
 use std::path::Path;
 
 use anyhow::Context as _;
-use mcap::records::Record;
 
 use crate::schema::Schema;
+
+pub mod chunk;
+pub mod records;
+mod summary;
+
+use records::{Record, op};
+
+/// The 8 bytes an MCAP file starts with.
+pub const MAGIC: [u8; 8] = *b"\x89MCAP0\r\n";
 
 /// A channel of a recording.
 #[derive(Debug, Clone)]
@@ -43,28 +60,81 @@ pub struct RecordedMessage<'a> {
     pub data: &'a [u8],
 }
 
+/// A stretch of a recording that was skipped as damaged.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct Damage {
+    /// Where it starts in the file, bytes.
+    pub offset: u64,
+    /// How many bytes were skipped.
+    pub bytes: u64,
+    /// The chunk's index in the file (0-based, counting every chunk record
+    /// met), when the damage is a chunk whose record could be read; `None`
+    /// for bytes that are not a readable record (a damaged length or header),
+    /// skipped up to the next intact chunk.
+    pub chunk: Option<u64>,
+    /// Why.
+    pub reason: String,
+}
+
+impl std::fmt::Display for Damage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.chunk {
+            Some(i) => write!(
+                f,
+                "damaged chunk #{i} at byte {} ({} bytes) skipped: {}",
+                self.offset, self.bytes, self.reason
+            ),
+            None => write!(
+                f,
+                "{} damaged bytes at byte {} skipped: {}",
+                self.bytes, self.offset, self.reason
+            ),
+        }
+    }
+}
+
 /// How much of a file was read.
 #[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Recovery {
     /// File size, bytes.
     pub file_bytes: u64,
-    /// Bytes read as complete records (everything before the cut).
+    /// Where reading ended: the end of the last complete record (everything
+    /// after it is lost with a cut).
     pub read_bytes: u64,
     /// The file does not end with its data-end record: the writer did not
     /// finish (killed, power lost, disk full).
     pub truncated: bool,
-    /// Complete chunks read.
+    /// Intact chunks read.
     pub chunks: u64,
-    /// Complete chunks that could not be decoded (skipped).
+    /// Damaged stretches skipped (`damaged.len()`).
     pub damaged_chunks: u64,
-    /// Why reading stopped early, if it did.
+    /// Each damaged chunk or stretch of bytes, in file order: nothing in it
+    /// was used; reading resumed at the next intact record.
+    pub damaged: Vec<Damage>,
+    /// Messages whose channel record was never read (lost in a damaged
+    /// chunk): they cannot be interpreted and are skipped.
+    pub unknown_channel_messages: u64,
+    /// Why reading stopped before the data end, if it did.
     pub reason: Option<String>,
 }
 
 impl Recovery {
     /// Bytes after the last complete record (lost with the cut).
     pub fn lost_bytes(&self) -> u64 {
-        self.file_bytes - self.read_bytes
+        self.file_bytes.saturating_sub(self.read_bytes)
+    }
+
+    /// One line per damage and for messages without a channel, for the
+    /// notes every command prints.
+    pub fn damage_notes(&self) -> Vec<String> {
+        let mut notes: Vec<String> = self.damaged.iter().map(Damage::to_string).collect();
+        if self.unknown_channel_messages > 0 {
+            notes.push(format!(
+                "{} messages skipped: their channel record was lost",
+                self.unknown_channel_messages
+            ));
+        }
+        notes
     }
 }
 
@@ -92,8 +162,9 @@ impl Recording {
 }
 
 /// Reads `path`, calling `on_message` with each message in file order.
-/// Errors only when the file is not an MCAP file or `on_message` fails; a
-/// cut or damaged file is reported in [`Recording::recovery`].
+/// Errors only when the file is not an MCAP file, cannot be read, or
+/// `on_message` fails; a cut or damaged file is reported in
+/// [`Recording::recovery`].
 pub fn read(
     path: &Path,
     on_message: impl FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>,
@@ -104,157 +175,400 @@ pub fn read(
 /// [`read`], reporting `(bytes read, file bytes)` after every record.
 pub fn read_with_progress(
     path: &Path,
-    mut on_progress: impl FnMut(u64, u64),
-    mut on_message: impl FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>,
+    on_progress: impl FnMut(u64, u64),
+    on_message: impl FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>,
 ) -> anyhow::Result<Recording> {
     let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
     let file_bytes = file
         .metadata()
         .with_context(|| format!("cannot read the size of {}", path.display()))?
         .len();
-    let mut input = BufReader::with_capacity(1 << 20, file);
-    let mut magic = [0u8; 8];
-    input
-        .read_exact(&mut magic)
-        .ok()
-        .filter(|_| magic == mcap::MAGIC)
-        .ok_or_else(|| anyhow::anyhow!("{} is not an MCAP file", path.display()))?;
+    walk(&file, file_bytes, on_progress, on_message).map_err(|e| match e {
+        WalkError::NotMcap => anyhow::anyhow!("{} is not an MCAP file", path.display()),
+        WalkError::Io(e) => {
+            anyhow::Error::new(e).context(format!("cannot read {}", path.display()))
+        }
+        WalkError::Consumer(e) => e,
+    })
+}
 
-    let mut rec = Recording {
-        recovery: Recovery {
-            file_bytes,
-            read_bytes: 8,
-            truncated: true,
+/// [`read_with_progress`] of a recording held in memory.
+pub fn read_bytes(
+    bytes: &[u8],
+    on_progress: impl FnMut(u64, u64),
+    on_message: impl FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>,
+) -> anyhow::Result<Recording> {
+    walk(bytes, bytes.len() as u64, on_progress, on_message).map_err(|e| match e {
+        WalkError::NotMcap => anyhow::anyhow!("not an MCAP file"),
+        WalkError::Io(e) => anyhow::Error::new(e),
+        WalkError::Consumer(e) => e,
+    })
+}
+
+/// Random access to the bytes of a recording.
+trait Source {
+    /// Fills `buf` from `offset`; the caller keeps within the file.
+    fn read_at(&self, offset: u64, buf: &mut [u8]) -> std::io::Result<()>;
+}
+
+impl Source for File {
+    fn read_at(&self, offset: u64, buf: &mut [u8]) -> std::io::Result<()> {
+        std::os::unix::fs::FileExt::read_exact_at(self, buf, offset)
+    }
+}
+
+impl Source for [u8] {
+    fn read_at(&self, offset: u64, buf: &mut [u8]) -> std::io::Result<()> {
+        let src = usize::try_from(offset)
+            .ok()
+            .and_then(|o| self.get(o..)?.get(..buf.len()))
+            .ok_or(std::io::ErrorKind::UnexpectedEof)?;
+        buf.copy_from_slice(src);
+        Ok(())
+    }
+}
+
+#[derive(Debug)]
+enum WalkError {
+    NotMcap,
+    Io(std::io::Error),
+    Consumer(anyhow::Error),
+}
+
+impl From<std::io::Error> for WalkError {
+    fn from(e: std::io::Error) -> Self {
+        WalkError::Io(e)
+    }
+}
+
+/// The largest record body read into memory: a chunk of
+/// [`chunk::MAX_CHUNK_BYTES`] (compressed data can be slightly larger than
+/// the data) or a metadata record. Larger records of the kinds nauta reads
+/// are damage; others (indexes, attachments) are skipped unread.
+const MAX_RECORD_BYTES: u64 = chunk::MAX_CHUNK_BYTES + (1 << 20);
+
+/// What is at an offset of the file.
+enum Next {
+    /// A record: opcode and body length (the body is in the buffer).
+    Record(u8, u64),
+    /// A record that is skipped unread (one nauta does not use).
+    Skip(u64),
+    /// The file ends here or inside this record's header or body: a cut.
+    Cut(String),
+    /// Bytes that are not a record.
+    Bad(String),
+}
+
+fn next_record<S: Source + ?Sized>(
+    src: &S,
+    file_bytes: u64,
+    offset: u64,
+    body: &mut Vec<u8>,
+) -> std::io::Result<Next> {
+    let left = file_bytes - offset;
+    if left < records::HEAD_BYTES {
+        return Ok(Next::Cut(format!(
+            "the file ends {left} bytes into a record header at byte {offset}"
+        )));
+    }
+    let mut head = [0u8; records::HEAD_BYTES as usize];
+    src.read_at(offset, &mut head)?;
+    let op = head[0];
+    let mut len_bytes = [0u8; 8];
+    len_bytes.copy_from_slice(&head[1..]);
+    let len = u64::from_le_bytes(len_bytes);
+    let room = left - records::HEAD_BYTES;
+    // MCAP reserves opcode 0 and 0x10..=0x7f; 0x80 and above are private records.
+    if op == 0 || (0x10..0x80).contains(&op) {
+        return Ok(Next::Bad(format!(
+            "opcode 0x{op:02x} at byte {offset} is not an MCAP record"
+        )));
+    }
+    if len > room {
+        return Ok(Next::Cut(format!(
+            "the record at byte {offset} (opcode 0x{op:02x}) needs {len} bytes, the file has {room}"
+        )));
+    }
+    let used = matches!(
+        op,
+        op::HEADER
+            | op::SCHEMA
+            | op::CHANNEL
+            | op::MESSAGE
+            | op::CHUNK
+            | op::METADATA
+            | op::DATA_END
+    );
+    if !used {
+        return Ok(Next::Skip(len));
+    }
+    if len > MAX_RECORD_BYTES {
+        return Ok(Next::Bad(format!(
+            "the record at byte {offset} (opcode 0x{op:02x}) declares {len} bytes, more than the {MAX_RECORD_BYTES} a reader accepts"
+        )));
+    }
+    // Bounded by the file and by MAX_RECORD_BYTES, so it fits a usize.
+    body.resize(len as usize, 0);
+    src.read_at(offset + records::HEAD_BYTES, body)?;
+    Ok(Next::Record(op, len))
+}
+
+/// The offset of the next plausible record after damage at `from`: a chunk,
+/// metadata or data-end record whose header is consistent with its length
+/// and lies inside the file. `None` when there is none.
+fn resync<S: Source + ?Sized>(src: &S, file_bytes: u64, from: u64) -> std::io::Result<Option<u64>> {
+    // A window and enough bytes after it to see a chunk's header.
+    const WINDOW: u64 = 1 << 20;
+    const PEEK: u64 = records::HEAD_BYTES + 44;
+    let mut window = Vec::new();
+    let mut pos = from;
+    while pos < file_bytes {
+        let n = (WINDOW + PEEK).min(file_bytes - pos);
+        window.resize(n as usize, 0);
+        src.read_at(pos, &mut window)?;
+        let scan = WINDOW.min(n) as usize;
+        for i in 0..scan {
+            if matches!(window[i], op::CHUNK | op::METADATA | op::DATA_END)
+                && plausible(src, file_bytes, pos + i as u64, &window[i..])?
+            {
+                return Ok(Some(pos + i as u64));
+            }
+        }
+        pos += scan as u64;
+    }
+    Ok(None)
+}
+
+fn plausible<S: Source + ?Sized>(
+    src: &S,
+    file_bytes: u64,
+    at: u64,
+    peek: &[u8],
+) -> std::io::Result<bool> {
+    let mut c = records::Cursor::new(peek);
+    let (Ok(op), Ok(len)) = (c.bytes(1, "opcode").map(|b| b[0]), c.u64("length")) else {
+        return Ok(false);
+    };
+    let fits = at
+        .checked_add(records::HEAD_BYTES)
+        .and_then(|b| b.checked_add(len))
+        .is_some_and(|end| end <= file_bytes);
+    if !fits {
+        return Ok(false);
+    }
+    Ok(match op {
+        op::DATA_END => len == 4,
+        op::CHUNK => {
+            let header = (|| {
+                c.bytes(24, "times and size")?;
+                c.u32("crc")?;
+                let compression = c.str("compression")?;
+                let records = c.u64("records length")?;
+                Ok::<_, records::RecordError>((compression, records))
+            })();
+            matches!(header, Ok((compression, records))
+                if matches!(compression, "" | "zstd" | "lz4")
+                    && records.checked_add(40 + compression.len() as u64) == Some(len))
+        }
+        op::METADATA if len <= 1 << 20 => {
+            let mut body = vec![0u8; len as usize];
+            src.read_at(at + records::HEAD_BYTES, &mut body)?;
+            records::parse_exact(op, &body).is_ok()
+        }
+        _ => false,
+    })
+}
+
+/// The reader's state while it walks a file.
+struct Walk<F> {
+    rec: Recording,
+    schemas: BTreeMap<u16, (String, Option<Schema>)>,
+    on_message: F,
+    /// The channels of the file's summary section (CRC-checked), for
+    /// messages whose own channel record was lost with a damaged chunk.
+    summary: BTreeMap<u16, Channel>,
+}
+
+fn walk<S, P, F>(
+    src: &S,
+    file_bytes: u64,
+    mut on_progress: P,
+    on_message: F,
+) -> Result<Recording, WalkError>
+where
+    S: Source + ?Sized,
+    P: FnMut(u64, u64),
+    F: FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>,
+{
+    let mut magic = [0u8; 8];
+    if file_bytes < 8 || src.read_at(0, &mut magic).is_err() || magic != MAGIC {
+        return Err(WalkError::NotMcap);
+    }
+    let mut w = Walk {
+        rec: Recording {
+            recovery: Recovery {
+                file_bytes,
+                read_bytes: 8,
+                truncated: true,
+                ..Default::default()
+            },
             ..Default::default()
         },
-        ..Default::default()
+        schemas: BTreeMap::new(),
+        on_message,
+        summary: summary::channels(src, file_bytes)?,
     };
-    let mut schemas: BTreeMap<u16, (String, Option<Schema>)> = BTreeMap::new();
     let mut body = Vec::new();
+    let mut chunk_data = Vec::new();
+    let mut chunk_index = 0u64;
+    let mut offset = 8u64;
     loop {
-        let offset = rec.recovery.read_bytes;
-        let mut head = [0u8; 9];
-        if file_bytes - offset < 9 {
-            rec.recovery.reason = Some(format!(
-                "the file ends {} bytes into a record header at byte {offset}",
-                file_bytes - offset
-            ));
-            break;
-        }
-        input
-            .read_exact(&mut head)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        let op = head[0];
-        let len = u64::from_le_bytes(head[1..9].try_into().unwrap_or([0; 8]));
-        if len > file_bytes - offset - 9 {
-            rec.recovery.reason = Some(format!(
-                "the record at byte {offset} (opcode 0x{op:02x}) needs {len} bytes, the file has {}",
-                file_bytes - offset - 9
-            ));
-            break;
-        }
-        body.resize(len as usize, 0);
-        input
-            .read_exact(&mut body)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        let record = match mcap::read::parse_record(op, &body) {
-            Ok(r) => r,
-            Err(e) => {
-                rec.recovery.reason = Some(format!("bad record at byte {offset}: {e}"));
-                break;
+        let parsed = match next_record(src, file_bytes, offset, &mut body)? {
+            Next::Record(op, len) => records::parse(op, &body)
+                .map(|r| (r, len))
+                .map_err(|e| format!("bad record at byte {offset} (opcode 0x{op:02x}): {e}")),
+            Next::Skip(len) => {
+                offset += records::HEAD_BYTES + len;
+                w.rec.recovery.read_bytes = offset;
+                on_progress(offset, file_bytes);
+                continue;
             }
+            Next::Cut(why) | Next::Bad(why) => Err(why),
         };
-        rec.recovery.read_bytes = offset + 9 + len;
-        let mut end = false;
+        let (record, len) = match parsed {
+            Ok(p) => p,
+            // Not a record: skip to the next one that is, or stop here.
+            Err(why) => match resync(src, file_bytes, offset + 1)? {
+                Some(next) => {
+                    w.damaged(offset, next - offset, None, why);
+                    offset = next;
+                    continue;
+                }
+                None => {
+                    w.rec.recovery.reason = Some(why);
+                    break;
+                }
+            },
+        };
+        let end = offset + records::HEAD_BYTES + len;
+        let mut data_end = false;
         match record {
-            Record::Chunk { header, data } => {
-                let records = mcap::read::ChunkReader::new(header, &data);
-                let mut damaged = None;
-                match records {
+            Record::Chunk(c) => {
+                let index = chunk_index;
+                chunk_index += 1;
+                let decoded = chunk::decompress(&c, &mut chunk_data)
+                    .and_then(|()| chunk::parse_all(&chunk_data));
+                match decoded {
                     Ok(records) => {
+                        w.rec.recovery.chunks += 1;
                         for r in records {
-                            match r {
-                                Ok(r) => handle(r, &mut rec, &mut schemas, &mut on_message)?,
-                                Err(e) => {
-                                    damaged = Some(e.to_string());
-                                    break;
-                                }
-                            }
+                            w.handle(r).map_err(WalkError::Consumer)?;
                         }
                     }
-                    Err(e) => damaged = Some(e.to_string()),
-                }
-                match damaged {
-                    Some(why) => {
-                        rec.recovery.damaged_chunks += 1;
-                        rec.recovery.reason =
-                            Some(format!("damaged chunk at byte {offset}: {why}"));
-                    }
-                    None => rec.recovery.chunks += 1,
+                    Err(e) => w.damaged(offset, end - offset, Some(index), e.to_string()),
                 }
             }
-            Record::Header(h) => rec.profile = h.profile,
-            Record::DataEnd(_) => end = true,
-            r => handle(r, &mut rec, &mut schemas, &mut on_message)?,
+            Record::Header { profile } => w.rec.profile = profile.to_owned(),
+            Record::DataEnd => data_end = true,
+            r => w.handle(r).map_err(WalkError::Consumer)?,
         }
-        on_progress(rec.recovery.read_bytes, file_bytes);
-        if end {
-            rec.recovery.truncated = false;
+        offset = end;
+        w.rec.recovery.read_bytes = offset;
+        on_progress(offset, file_bytes);
+        if data_end {
+            w.rec.recovery.truncated = false;
             break;
         }
     }
     on_progress(file_bytes, file_bytes);
-    Ok(rec)
+    Ok(w.rec)
 }
 
-fn handle(
-    record: Record<'_>,
-    rec: &mut Recording,
-    schemas: &mut BTreeMap<u16, (String, Option<Schema>)>,
-    on_message: &mut impl FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>,
-) -> anyhow::Result<()> {
-    match record {
-        Record::Schema { header, data } => {
-            let parsed = (header.encoding == crate::SCHEMA_ENCODING)
-                .then(|| Schema::from_bytes(&data).ok())
-                .flatten();
-            schemas.insert(header.id, (header.name, parsed));
-        }
-        Record::Channel(c) => {
-            let (type_name, schema) = match schemas.get(&c.schema_id) {
-                Some((name, schema)) => (name.clone(), schema.clone()),
-                None => (c.metadata.get("type").cloned().unwrap_or_default(), None),
-            };
-            rec.channels.insert(
-                c.id,
-                Channel {
-                    id: c.id,
-                    topic: c.topic,
-                    type_name,
-                    message_encoding: c.message_encoding,
-                    schema,
-                },
-            );
-        }
-        Record::Message { header, data } => {
-            // A message whose channel record was lost is skipped: it cannot be
-            // interpreted (MCAP writes a channel before its first message).
-            if let Some(ch) = rec.channels.get(&header.channel_id) {
-                on_message(
-                    ch,
-                    &RecordedMessage {
-                        log_time_ns: header.log_time,
-                        publish_time_ns: header.publish_time,
-                        data: &data,
-                    },
-                )?;
-            }
-        }
-        Record::Metadata(m) => rec.metadata.push((m.name, m.metadata)),
-        _ => {}
+impl<F> Walk<F>
+where
+    F: FnMut(&Channel, &RecordedMessage<'_>) -> anyhow::Result<()>,
+{
+    fn damaged(&mut self, offset: u64, bytes: u64, chunk: Option<u64>, reason: String) {
+        let r = &mut self.rec.recovery;
+        r.damaged.push(Damage {
+            offset,
+            bytes,
+            chunk,
+            reason,
+        });
+        r.damaged_chunks = r.damaged.len() as u64;
     }
-    Ok(())
+
+    fn handle(&mut self, record: Record<'_>) -> anyhow::Result<()> {
+        let rec = &mut self.rec;
+        match record {
+            Record::Schema {
+                id,
+                name,
+                encoding,
+                data,
+            } => {
+                let parsed = (encoding == crate::SCHEMA_ENCODING)
+                    .then(|| Schema::from_bytes(data).ok())
+                    .flatten();
+                self.schemas.insert(id, (name.to_owned(), parsed));
+            }
+            Record::Channel {
+                id,
+                schema_id,
+                topic,
+                message_encoding,
+                metadata,
+            } => {
+                let (type_name, schema) = match self.schemas.get(&schema_id) {
+                    Some((name, schema)) => (name.clone(), schema.clone()),
+                    None => (metadata.get("type").cloned().unwrap_or_default(), None),
+                };
+                rec.channels.insert(
+                    id,
+                    Channel {
+                        id,
+                        topic: topic.to_owned(),
+                        type_name,
+                        message_encoding: message_encoding.to_owned(),
+                        schema,
+                    },
+                );
+            }
+            Record::Message {
+                channel_id,
+                log_time,
+                publish_time,
+                data,
+            } => {
+                // A message whose channel record was lost is interpreted by
+                // the summary's channel, or not at all (MCAP writes a channel
+                // before its first message).
+                if !rec.channels.contains_key(&channel_id)
+                    && let Some(ch) = self.summary.remove(&channel_id)
+                {
+                    rec.channels.insert(channel_id, ch);
+                }
+                match rec.channels.get(&channel_id) {
+                    Some(ch) => (self.on_message)(
+                        ch,
+                        &RecordedMessage {
+                            log_time_ns: log_time,
+                            publish_time_ns: publish_time,
+                            data,
+                        },
+                    )?,
+                    None => rec.recovery.unknown_channel_messages += 1,
+                }
+            }
+            Record::Metadata { name, entries } => rec.metadata.push((name.to_owned(), entries)),
+            _ => {}
+        }
+        Ok(())
+    }
 }
 
+#[cfg(test)]
+mod damage_tests;
 #[cfg(test)]
 mod tests;

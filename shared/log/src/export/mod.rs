@@ -366,6 +366,7 @@ pub fn export(
                 .unwrap_or_default()
         ));
     }
+    notes.extend(rec.recovery.damage_notes());
     let run = RunInfo::resolve(
         rec.metadata(crate::META_RUN),
         options,
@@ -513,11 +514,24 @@ fn same_file(a: &Path, b: &Path) -> bool {
 
 /// The output being written: a hidden file beside the destination, renamed
 /// into place by [`PartFile::commit`] and removed if the export fails.
+///
+/// A signal ends a process without running destructors: a command that
+/// exports installs a handler that removes [`part_path`] first.
 struct PartFile {
     path: PathBuf,
     output: PathBuf,
     file: Option<File>,
     committed: bool,
+}
+
+/// The hidden file an export to `output` writes before it is complete:
+/// `.NAME.PID.part` beside `output` (`None` when `output` names no file).
+pub fn part_path(output: &Path) -> Option<PathBuf> {
+    let name = output.file_name()?;
+    let mut part_name = std::ffi::OsString::from(".");
+    part_name.push(name);
+    part_name.push(format!(".{}.part", std::process::id()));
+    Some(output.with_file_name(part_name))
 }
 
 impl PartFile {
@@ -526,22 +540,18 @@ impl PartFile {
             path: output.to_owned(),
             source,
         };
-        let name = output.file_name().ok_or_else(|| {
-            write_error(std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "the output path names no file",
-            ))
-        })?;
         if output.is_dir() {
             return Err(write_error(std::io::Error::new(
                 std::io::ErrorKind::IsADirectory,
                 "it is a directory",
             )));
         }
-        let mut part_name = std::ffi::OsString::from(".");
-        part_name.push(name);
-        part_name.push(format!(".{}.part", std::process::id()));
-        let path = output.with_file_name(part_name);
+        let path = part_path(output).ok_or_else(|| {
+            write_error(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the output path names no file",
+            ))
+        })?;
         let file = File::create(&path).map_err(write_error)?;
         Ok(PartFile {
             path,
