@@ -54,7 +54,7 @@ pub mod strapdown;
 
 pub use alignment::Alignment;
 pub use attitude::{AttitudeError, HeadingInclinationError};
-pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot, quat_to_wxyz};
+pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot};
 pub use frames::{Frd, Ned, Rotation, Vector};
 pub use gyro::{GyroIntegrator, GyroState};
 pub use mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};

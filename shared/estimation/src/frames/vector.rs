@@ -2,7 +2,7 @@
 
 use std::fmt;
 use std::marker::PhantomData;
-use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
+use std::ops::{Add, AddAssign, Div, Index, Mul, Neg, Sub, SubAssign};
 
 use nalgebra::Vector3;
 
@@ -81,6 +81,11 @@ impl<F> Vector<F> {
     /// Euclidean norm.
     pub fn norm(&self) -> f64 {
         self.v.norm()
+    }
+
+    /// The components x, y, z.
+    pub fn iter(&self) -> impl Iterator<Item = &f64> {
+        self.v.iter()
     }
 
     /// Every component finite.
@@ -174,5 +179,13 @@ impl<F> Div<f64> for Vector<F> {
     type Output = Self;
     fn div(self, s: f64) -> Self {
         Self::from_nalgebra(self.v / s)
+    }
+}
+
+/// Component `i` (0 = x, 1 = y, 2 = z); panics beyond 2, as an array does.
+impl<F> Index<usize> for Vector<F> {
+    type Output = f64;
+    fn index(&self, i: usize) -> &f64 {
+        &self.v[i]
     }
 }
