@@ -19,6 +19,7 @@
 //!   check); `--site` and `--declination` for other data in BROAD's format;
 //!   and `nauta.import` naming the source.
 
+use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -199,7 +200,7 @@ pub fn write_broad(
                 header: Header::new(stamp_ns, truth_n, Role::Sensor, 0),
                 lat_rad: lat,
                 lon_rad: lon,
-                quat_nb: [q.w, q.i, q.j, q.k],
+                quat_nb: Rotation::<Frd, Ned>::from_nalgebra(q).to_wxyz(),
                 rate_nb_body_rad_s: s.gyro_rad_s.into(),
                 ..Default::default()
             };

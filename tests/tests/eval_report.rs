@@ -4,6 +4,7 @@
 //! exist yet). Every expected figure follows from those choices; none is
 //! read back from the program.
 
+use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -94,12 +95,12 @@ fn offset(lat: f64, lon: f64, h: f64, dn: f64, de: f64) -> (f64, f64) {
 }
 
 fn quat(q: nalgebra::UnitQuaternion<f64>) -> [f64; 4] {
-    [q.w, q.i, q.j, q.k]
+    Rotation::<Frd, Ned>::from_nalgebra(q).to_wxyz()
 }
 
 fn truth_quat(t: &TruthState) -> nalgebra::UnitQuaternion<f64> {
     let q = t.quat_nb;
-    nalgebra::UnitQuaternion::new_normalize(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]))
+    nalgebra::UnitQuaternion::new_normalize(Rotation::<Frd, Ned>::quaternion_from_wxyz(q))
 }
 
 /// The truth rotated by Euler-angle errors (rad).

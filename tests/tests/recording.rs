@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::Duration;
 
+use nauta_estimation::frames::{Frd, Ned, Rotation};
 use nauta_tests::*;
 
 const BOUND: Duration = Duration::from_secs(300);
@@ -493,10 +494,8 @@ fn simulated_broad_trial(path: &Path) -> (f64, f64, f64) {
         let m = m.expect("step");
         let Some(r) = m.imu else { continue };
         let t = r.stamp_ns as f64 * 1e-9 - *t0.get_or_insert(r.stamp_ns as f64 * 1e-9);
-        let [w, x, y, z] = m.truth.quat_nb;
-        let q = nauta_datasets::broad::enu_from_ned(&nalgebra::UnitQuaternion::new_normalize(
-            nalgebra::Quaternion::new(w, x, y, z),
-        ));
+        let q_nb = Rotation::<Frd, Ned>::from_wxyz(m.truth.quat_nb).expect("unit truth");
+        let q = nauta_datasets::broad::enu_from_ned(q_nb.as_nalgebra());
         let v = |a: [f64; 3]| format!("{},{},{}", a[0], a[1], a[2]);
         csv += &format!(
             "{t},{},{},{},{},{},{},{},1\n",

@@ -4,11 +4,12 @@
 //! it left in shared memory. Every test runs in its own namespace under a
 //! watchdog; latencies are printed (benchmark figures), not asserted.
 
+use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::time::{Duration, Instant};
 
 use std::collections::BTreeMap;
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 use nauta_messages::{AttitudeEstimate, RunEvent, TruthState, event_kind, fixed_str};
 use nauta_runtime::ports::Inbox;
 use nauta_runtime::{ClockMode, Namespace, Subscriber, services};
@@ -60,7 +61,7 @@ struct Follower {
 }
 
 fn quat(q: [f64; 4]) -> UnitQuaternion<f64> {
-    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+    UnitQuaternion::from_quaternion(Rotation::<Frd, Ned>::quaternion_from_wxyz(q))
 }
 
 impl Follower {

@@ -163,6 +163,7 @@ use anyhow::Context as _;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use nauta_datasets::broad::{self, BroadTrial};
 use nauta_estimation::calibration::{self, MagCalibration, MagFitMethod, PsoParams};
+use nauta_estimation::frames::{Frd, Ned, Rotation, Vector};
 use nauta_estimation::mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
 use nauta_estimation::pf::{ParticleFilter, PfConfig, PfParams, aiding_quaternion};
 use nauta_estimation::{AttitudeError, AttitudeEstimator, GyroIntegrator, HeadingInclinationError};
@@ -283,12 +284,15 @@ pub fn score_trial(
     )?;
     let mut estimates = Vec::with_capacity(trial.samples.len());
     let t0 = Instant::now();
-    estimates.push(est.estimate().q_nb);
+    estimates.push(est.estimate().q_nb.to_nalgebra());
     for pair in trial.samples.windows(2) {
         let (prev, s) = (&pair[0], &pair[1]);
-        est.predict(&s.gyro_rad_s, s.t_s - prev.t_s);
-        est.update(&s.accel_m_s2, &s.mag_ut);
-        estimates.push(est.estimate().q_nb);
+        est.predict(&Vector::from_nalgebra(s.gyro_rad_s), s.t_s - prev.t_s);
+        est.update(
+            &Vector::from_nalgebra(s.accel_m_s2),
+            &Vector::from_nalgebra(s.mag_ut),
+        );
+        estimates.push(est.estimate().q_nb.to_nalgebra());
     }
     let estimator_s = t0.elapsed().as_secs_f64();
     let (mut n, mut total, mut heading, mut incl) = (0usize, 0.0, 0.0, 0.0);
@@ -460,9 +464,9 @@ pub const SIM_CONDITIONS: [(&str, ScenarioKind); 3] = [
 #[derive(Debug, Clone, Copy)]
 struct SimSample {
     dt_s: f64,
-    gyro: Vector3<f64>,
-    accel: Vector3<f64>,
-    mag: Vector3<f64>,
+    gyro: Vector<Frd>,
+    accel: Vector<Frd>,
+    mag: Vector<Frd>,
     truth: UnitQuaternion<f64>,
 }
 
@@ -532,13 +536,14 @@ fn simulate(kind: ScenarioKind) -> anyhow::Result<(Vec<SimSample>, f64, f64, Mag
     while let Some(m) = generator.step() {
         let m = m?;
         let Some(r) = m.imu else { continue };
-        let [w, x, y, z] = m.truth.quat_nb;
         samples.push(SimSample {
             dt_s: r.interval_s,
-            gyro: Vector3::from(r.gyro_rad_s),
-            accel: Vector3::from(r.accel_m_s2),
-            mag: cal.apply(&Vector3::from(r.mag_ut)),
-            truth: UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z)),
+            gyro: Vector::from_array(r.gyro_rad_s),
+            accel: Vector::from_array(r.accel_m_s2),
+            mag: Vector::from_nalgebra(cal.apply(&Vector3::from(r.mag_ut))),
+            truth: Rotation::<Frd, Ned>::from_wxyz(m.truth.quat_nb)
+                .context("simulated truth attitude")?
+                .to_nalgebra(),
         });
     }
     Ok((samples, origin.lat_rad, field.declination_rad, cal))
@@ -556,8 +561,8 @@ fn score_sim(
     let mut est = start(
         variant,
         settings,
-        &first.accel,
-        &first.mag,
+        first.accel.as_nalgebra(),
+        first.mag.as_nalgebra(),
         latitude_rad,
         declination_rad,
     )?;
@@ -566,7 +571,7 @@ fn score_sim(
     for s in &samples[1..] {
         est.predict(&s.gyro, s.dt_s);
         est.update(&s.accel, &s.mag);
-        out.push(est.estimate().q_nb);
+        out.push(est.estimate().q_nb.to_nalgebra());
     }
     let estimator_s = t0.elapsed().as_secs_f64();
     let mut euler = [0.0; 3];

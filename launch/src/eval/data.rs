@@ -8,6 +8,7 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use nalgebra::{Matrix2, UnitQuaternion, Vector3};
+use nauta_estimation::frames::Ned;
 use nauta_messages::checked::{
     self, BuoyRangeReading, Gps, LblReplyReading, Truth, limits, quaternion, scalar, vector,
 };
@@ -295,8 +296,8 @@ fn truth(data: &[u8]) -> Option<TruthSample> {
         lat_rad: t.lat_rad,
         lon_rad: t.lon_rad,
         depth_m: t.depth_m,
-        vel_ned_m_s: t.vel_ned_m_s,
-        attitude: t.attitude,
+        vel_ned_m_s: t.vel_ned_m_s.to_nalgebra(),
+        attitude: t.attitude.to_nalgebra(),
         distance_m: scalar("TruthState", "distance_m", m.distance_m, 0.0, 1e9).ok()?,
     })
 }
@@ -349,11 +350,11 @@ fn nav(m: &NavSolution) -> Result<EstimateSample, checked::ValidationError> {
         limits::DEPTH_MIN_M,
         limits::DEPTH_MAX_M,
     )?;
-    let vel = vector(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?;
+    let vel = vector::<Ned>(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?.to_nalgebra();
     let attitude = if m.quat_nb == [0.0; 4] {
         None
     } else {
-        Some(quaternion(T, "quat_nb", m.quat_nb)?)
+        Some(quaternion(T, "quat_nb", m.quat_nb)?.to_nalgebra())
     };
     for s in m.pos_std_ned_m {
         scalar(T, "pos_std_ned_m", s, 0.0, STD_MAX_M)?;
@@ -371,8 +372,8 @@ fn nav(m: &NavSolution) -> Result<EstimateSample, checked::ValidationError> {
 fn attitude(m: &AttitudeEstimate) -> Option<EstimateSample> {
     let a = checked::Attitude::try_from(m).ok()?;
     Some(EstimateSample {
-        attitude: Some(a.attitude),
-        att_std_rad: (a.std_rad.iter().all(|s| *s > 0.0)).then_some(a.std_rad),
+        attitude: Some(a.attitude.to_nalgebra()),
+        att_std_rad: (a.std_rad.iter().all(|s| *s > 0.0)).then_some(a.std_rad.to_nalgebra()),
         ..empty(a.stamp_ns)
     })
 }

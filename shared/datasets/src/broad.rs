@@ -43,6 +43,7 @@
 //! "North" is whatever north the reference's Earth frame uses: see
 //! `launch/src/bench/attitude.rs` for how the benchmark sets the declination.
 
+use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -277,7 +278,8 @@ fn parse_row(line: &str) -> Result<BroadSample, String> {
     let reference_enu = if q.iter().all(|x| x.is_nan()) {
         None
     } else if q.iter().all(|x| x.is_finite()) {
-        let q4 = Quaternion::new(q[0], q[1], q[2], q[3]);
+        // The order only: the reference is body → ENU, not a frame of `frames`.
+        let q4 = Rotation::<Frd, Ned>::quaternion_from_wxyz(q);
         let norm = q4.norm();
         if !((norm - 1.0).abs() <= 1e-3) {
             return Err(format!("reference quaternion has norm {norm}"));

@@ -3,19 +3,20 @@
 //! `attitude` service, and a fixed-size snapshot for warm start and hot swap
 //! (DESIGN §5).
 
-use nalgebra::{UnitQuaternion, Vector3};
 use thiserror::Error;
+
+use crate::frames::{Frd, Ned, Rotation, Vector, WxyzError};
 
 /// What an attitude estimator reports after each input.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AttitudeOutput {
     /// Attitude, body (FRD) → NED.
-    pub q_nb: UnitQuaternion<f64>,
+    pub q_nb: Rotation<Frd, Ned>,
     /// Standard deviation of the attitude error about N, E, D, rad; zeros when the
     /// estimator has no uncertainty model (as the `AttitudeEstimate` message says).
-    pub std_rad: Vector3<f64>,
+    pub std_rad: Vector<Ned>,
     /// Gyro bias in use, FRD, rad/s.
-    pub gyro_bias: Vector3<f64>,
+    pub gyro_bias: Vector<Frd>,
 }
 
 /// Everything needed to warm-start an attitude estimator, in plain arrays (it maps
@@ -56,7 +57,7 @@ impl AttitudeStateSnapshot {
 
     /// The snapshot's quaternion and bias as domain values, checked: every number
     /// finite (covariance included) and `|q|` within [`Self::MAX_NORM_ERROR`] of 1.
-    pub fn checked(&self) -> Result<(UnitQuaternion<f64>, Vector3<f64>), AttitudeRestoreError> {
+    pub fn checked(&self) -> Result<(Rotation<Frd, Ned>, Vector<Frd>), AttitudeRestoreError> {
         let finite = self
             .q
             .iter()
@@ -65,21 +66,12 @@ impl AttitudeStateSnapshot {
         if !finite.clone().all(|v| v.is_finite()) {
             return Err(AttitudeRestoreError::NonFinite);
         }
-        let q4 = nalgebra::Quaternion::new(self.q[0], self.q[1], self.q[2], self.q[3]);
-        let norm = q4.norm();
-        if norm.is_nan() || (norm - 1.0).abs() > Self::MAX_NORM_ERROR {
-            return Err(AttitudeRestoreError::NotUnit(norm));
-        }
-        Ok((
-            UnitQuaternion::new_normalize(q4),
-            Vector3::from(self.gyro_bias),
-        ))
+        let q = Rotation::from_wxyz_within(self.q, Self::MAX_NORM_ERROR).map_err(|e| match e {
+            WxyzError::NonFinite => AttitudeRestoreError::NonFinite,
+            WxyzError::NotUnit(norm) => AttitudeRestoreError::NotUnit(norm),
+        })?;
+        Ok((q, Vector::from_array(self.gyro_bias)))
     }
-}
-
-/// `[w, x, y, z]` of a unit quaternion.
-pub fn quat_to_wxyz(q: &UnitQuaternion<f64>) -> [f64; 4] {
-    [q.w, q.i, q.j, q.k]
 }
 
 /// An attitude estimator: the pure core behind the `attitude` service.
@@ -89,11 +81,11 @@ pub fn quat_to_wxyz(q: &UnitQuaternion<f64>) -> [f64; 4] {
 pub trait AttitudeEstimator {
     /// Propagates with one gyro sample: the average angular rate `ω_ib^b` (rad/s,
     /// FRD) over an interval of `dt_s` seconds ending now.
-    fn predict(&mut self, gyro_rad_s: &Vector3<f64>, dt_s: f64);
+    fn predict(&mut self, gyro_rad_s: &Vector<Frd>, dt_s: f64);
 
     /// Corrects with one aiding pair: specific force (m/s², FRD) and magnetic field
     /// (µT, FRD, calibrated).
-    fn update(&mut self, accel_m_s2: &Vector3<f64>, mag_ut: &Vector3<f64>);
+    fn update(&mut self, accel_m_s2: &Vector<Frd>, mag_ut: &Vector<Frd>);
 
     /// The current estimate.
     fn estimate(&self) -> AttitudeOutput;
@@ -122,11 +114,8 @@ mod tests {
     #[test]
     fn checked_accepts_a_valid_snapshot() {
         let (q, b) = snap().checked().expect("valid");
-        assert_eq!(
-            quat_to_wxyz(&q).map(f64::to_bits),
-            [0.5f64; 4].map(f64::to_bits)
-        );
-        assert_eq!(b, Vector3::new(1e-4, 0.0, -1e-4));
+        assert_eq!(q.to_wxyz().map(f64::to_bits), [0.5f64; 4].map(f64::to_bits));
+        assert_eq!(b, Vector::new(1e-4, 0.0, -1e-4));
     }
 
     #[test]

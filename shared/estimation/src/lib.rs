@@ -17,6 +17,8 @@
 //! - [`alignment`]: static coarse alignment from accelerometer and magnetometer.
 //! - [`calibration`]: static gyro/accelerometer offsets and magnetometer hard-
 //!   and soft-iron calibration (least-squares ellipsoid, particle swarm).
+//! - [`frames`]: frames in types: `Vector<Frd>`, `Vector<Ned>`, `Rotation<Frd, Ned>`,
+//!   and the one conversion between the wire's `[w, x, y, z]` and the quaternion.
 //! - [`estimator`]: the [`AttitudeEstimator`] role trait and its snapshot.
 //! - [`local`]: north/east/down about an origin: the exact local tangent plane
 //!   (through ECEF) every tool uses, and paper 002 eq. 4's flat form.
@@ -40,6 +42,7 @@ pub mod attitude_core;
 pub mod calibration;
 pub mod earth;
 pub mod estimator;
+pub mod frames;
 pub mod gyro;
 pub mod local;
 pub mod mekf;
@@ -51,7 +54,8 @@ pub mod strapdown;
 
 pub use alignment::Alignment;
 pub use attitude::{AttitudeError, HeadingInclinationError};
-pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot, quat_to_wxyz};
+pub use estimator::{AttitudeEstimator, AttitudeOutput, AttitudeStateSnapshot};
+pub use frames::{Frd, Ned, Rotation, Vector};
 pub use gyro::{GyroIntegrator, GyroState};
 pub use mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
 pub use pf::{ParticleFilter, PfConfig, PfParams};

@@ -8,7 +8,7 @@
 //! They are defined here, in the pure crate, so that an estimator depends on
 //! no IPC crate at all (`nauta-messages` builds on this crate, not the reverse).
 
-use nalgebra::{UnitQuaternion, Vector3};
+use crate::frames::{Frd, Ned, Rotation, Vector};
 
 /// A checked IMU sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -18,11 +18,11 @@ pub struct Imu {
     /// Interval length, s.
     pub interval_s: f64,
     /// Angular rate, FRD, rad/s.
-    pub gyro_rad_s: Vector3<f64>,
+    pub gyro_rad_s: Vector<Frd>,
     /// Specific force, FRD, m/s².
-    pub accel_m_s2: Vector3<f64>,
+    pub accel_m_s2: Vector<Frd>,
     /// Magnetic flux density, FRD, µT.
-    pub mag_ut: Vector3<f64>,
+    pub mag_ut: Vector<Frd>,
 }
 
 /// A checked depth sample.
@@ -40,7 +40,7 @@ pub struct Dvl {
     /// Stamp, ns.
     pub stamp_ns: u64,
     /// Velocity over the bottom, FRD, m/s.
-    pub velocity_body_m_s: Vector3<f64>,
+    pub velocity_body_m_s: Vector<Frd>,
     /// Altitude, m.
     pub altitude_m: f64,
     /// Bit i: beam i valid.
@@ -130,9 +130,9 @@ pub struct Truth {
     /// Depth, m.
     pub depth_m: f64,
     /// Velocity NED, m/s.
-    pub vel_ned_m_s: Vector3<f64>,
+    pub vel_ned_m_s: Vector<Ned>,
     /// Attitude body → NED.
-    pub attitude: UnitQuaternion<f64>,
+    pub attitude: Rotation<Frd, Ned>,
 }
 
 /// A checked attitude estimate.
@@ -141,11 +141,11 @@ pub struct Attitude {
     /// Stamp, ns.
     pub stamp_ns: u64,
     /// Attitude body → NED.
-    pub attitude: UnitQuaternion<f64>,
+    pub attitude: Rotation<Frd, Ned>,
     /// Error standard deviation about N, E, D, rad.
-    pub std_rad: Vector3<f64>,
+    pub std_rad: Vector<Ned>,
     /// Gyro bias, FRD, rad/s.
-    pub gyro_bias_rad_s: Vector3<f64>,
+    pub gyro_bias_rad_s: Vector<Frd>,
 }
 
 /// A checked navigation solution of the aided INS (`ains/nav`).
@@ -160,14 +160,14 @@ pub struct Nav {
     /// Depth, m.
     pub depth_m: f64,
     /// Velocity over ground, NED, m/s.
-    pub vel_ned_m_s: Vector3<f64>,
+    pub vel_ned_m_s: Vector<Ned>,
     /// Attitude body → NED, when the solution carries one (the wire's zero
     /// quaternion means none).
-    pub attitude: Option<UnitQuaternion<f64>>,
+    pub attitude: Option<Rotation<Frd, Ned>>,
     /// Position standard deviation N, E, D, m.
-    pub pos_std_ned_m: Vector3<f64>,
+    pub pos_std_ned_m: Vector<Ned>,
     /// Velocity standard deviation N, E, D, m/s.
-    pub vel_std_ned_m_s: Vector3<f64>,
+    pub vel_std_ned_m_s: Vector<Ned>,
     /// Predicted accumulated horizontal position error (paper 002), m.
     pub predicted_drift_m: f64,
     /// Aiding mode bits.

@@ -2,8 +2,9 @@
 //! Tests of the core: parameters, and accuracy of `gyro`, `mekf` and `pf` against the
 //! simulator's truth (`nauta_sim::scenario`), in-process.
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::UnitQuaternion;
 use nauta_estimation::AttitudeError;
+use nauta_estimation::frames::{Frd, Ned, Rotation, Vector};
 use nauta_sim::mission::Origin;
 use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams};
 use nauta_sim::suite::SuiteConfig;
@@ -99,17 +100,20 @@ fn run(kind: ScenarioKind, duration_s: f64, clean_mag: bool) -> Outcome {
     let mut inside = 0u64;
     each_sample(&mut generator, |imu, truth| {
         if let Some(o) = gyro.step(imu).expect("step") {
-            out.gyro.push(&AttitudeError::between(&o.q_nb, truth));
+            out.gyro
+                .push(&AttitudeError::between(o.q_nb.as_nalgebra(), truth));
         }
         if let Some(o) = mekf.step(imu).expect("step") {
-            let e = AttitudeError::between(&o.q_nb, truth);
+            let e = AttitudeError::between(o.q_nb.as_nalgebra(), truth);
             out.mekf.push(&e);
             if imu.stamp_ns as f64 * 1e-9 > 60.0 {
                 let m = &mut out.mekf_max_after_60_s;
                 m[0] = m[0].max(e.roll_rad.abs().max(e.pitch_rad.abs()).to_degrees());
                 m[1] = m[1].max(e.yaw_rad.abs().to_degrees());
             }
-            let nav = nauta_estimation::attitude::rotation_vector(&(truth * o.q_nb.inverse()));
+            let nav = nauta_estimation::attitude::rotation_vector(
+                &(truth * o.q_nb.as_nalgebra().inverse()),
+            );
             if (0..3).all(|i| nav[i].abs() <= 3.0 * o.std_rad[i]) {
                 inside += 1;
             }
@@ -353,12 +357,7 @@ fn pf_warm_starts_from_a_snapshot() {
         // The replayed samples up to the snapshot are skipped.
         assert!(warm.step(&imus[split - 1]).expect("step").is_none());
         let out = warm.step(&imus[split]).expect("step").expect("running");
-        let q = UnitQuaternion::new_normalize(Quaternion::new(
-            snapshot.q[0],
-            snapshot.q[1],
-            snapshot.q[2],
-            snapshot.q[3],
-        ));
+        let q = Rotation::<Frd, Ned>::from_wxyz(snapshot.q).expect("unit");
         // One sample of motion (≤ 0.2° at 20 °/s and 100 Hz) plus the update.
         let jump = out.q_nb.angle_to(&q).to_degrees();
         assert!(jump < 0.5, "from {name}: {jump}°");
@@ -407,7 +406,7 @@ fn score<const N: usize>(
     each_sample(generator, |imu, truth| {
         for (core, acc) in cores.iter_mut().zip(rms.iter_mut()) {
             if let Some(o) = core.step(imu).expect("step") {
-                acc.push(&AttitudeError::between(&o.q_nb, truth));
+                acc.push(&AttitudeError::between(o.q_nb.as_nalgebra(), truth));
             }
         }
     });
@@ -423,15 +422,12 @@ fn each_sample(generator: &mut Generator, mut f: impl FnMut(&Imu, &UnitQuaternio
         let imu = Imu {
             stamp_ns: r.stamp_ns,
             interval_s: r.interval_s,
-            gyro_rad_s: Vector3::from(r.gyro_rad_s),
-            accel_m_s2: Vector3::from(r.accel_m_s2),
-            mag_ut: Vector3::from(r.mag_ut),
+            gyro_rad_s: Vector::from_array(r.gyro_rad_s),
+            accel_m_s2: Vector::from_array(r.accel_m_s2),
+            mag_ut: Vector::from_array(r.mag_ut),
         };
-        let [w, x, y, z] = m.truth.quat_nb;
-        f(
-            &imu,
-            &UnitQuaternion::new_normalize(Quaternion::new(w, x, y, z)),
-        );
+        let truth = Rotation::<Frd, Ned>::from_wxyz(m.truth.quat_nb).expect("unit truth");
+        f(&imu, truth.as_nalgebra());
     }
 }
 

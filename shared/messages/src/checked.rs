@@ -3,7 +3,7 @@
 //! estimator sees it; whatever fails is counted as rejected and the estimator's
 //! state is left alone (DESIGN §4, "bad values are part of the contract").
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nauta_estimation::frames::{Frd, Ned, Rotation, Vector, WxyzError};
 
 pub use nauta_estimation::readings::{
     Ahrs, Attitude, BuoyRangeReading, Depth, Dvl, Fix, Gps, Imu, LblNav, LblReplyReading, Nav,
@@ -105,53 +105,40 @@ pub fn scalar(
     Ok(value)
 }
 
-/// Checks a 3-vector component by component (each within `±limit`).
-pub fn vector(
+/// Checks a 3-vector component by component (each within `±limit`); the
+/// frame `F` is the field's (FRD or NED).
+pub fn vector<F>(
     type_name: &'static str,
     field: &'static str,
     v: [f64; 3],
     limit: f64,
-) -> Result<Vector3<f64>, ValidationError> {
+) -> Result<Vector<F>, ValidationError> {
     for x in v {
         scalar(type_name, field, x, -limit, limit)?;
     }
-    Ok(Vector3::from(v))
+    Ok(Vector::from_array(v))
 }
 
-/// Checks a `[w, x, y, z]` quaternion: finite and of unit norm within
-/// [`QUATERNION_NORM_TOLERANCE`]; returns it renormalised.
+/// Checks a `[w, x, y, z]` quaternion body → NED: finite and of unit norm
+/// within [`QUATERNION_NORM_TOLERANCE`]; returns it renormalised
+/// ([`Rotation::from_wxyz_within`], the one conversion).
 pub fn quaternion(
     type_name: &'static str,
     field: &'static str,
     q: [f64; 4],
-) -> Result<UnitQuaternion<f64>, ValidationError> {
-    for x in q {
-        scalar(
+) -> Result<Rotation<Frd, Ned>, ValidationError> {
+    Rotation::from_wxyz_within(q, QUATERNION_NORM_TOLERANCE).map_err(|e| match e {
+        WxyzError::NonFinite => ValidationError::NonFinite {
             type_name,
             field,
-            x,
-            -1.0 - QUATERNION_NORM_TOLERANCE,
-            1.0 + QUATERNION_NORM_TOLERANCE,
-        )
-        .map_err(|e| match e {
-            ValidationError::OutOfRange { .. } => ValidationError::NotUnitQuaternion {
-                type_name,
-                field,
-                norm: q.iter().map(|c| c * c).sum::<f64>().sqrt(),
-            },
-            other => other,
-        })?;
-    }
-    let quat = Quaternion::new(q[0], q[1], q[2], q[3]);
-    let norm = quat.norm();
-    if !((norm - 1.0).abs() <= QUATERNION_NORM_TOLERANCE) {
-        return Err(ValidationError::NotUnitQuaternion {
+            value: q.into_iter().find(|x| !x.is_finite()).unwrap_or(f64::NAN),
+        },
+        WxyzError::NotUnit(norm) => ValidationError::NotUnitQuaternion {
             type_name,
             field,
             norm,
-        });
-    }
-    Ok(UnitQuaternion::new_normalize(quat))
+        },
+    })
 }
 
 /// Enforces non-decreasing stamps on one input stream.
@@ -384,7 +371,7 @@ impl TryFrom<&AttitudeEstimate> for Attitude {
         Ok(Attitude {
             stamp_ns: m.header.stamp_ns,
             attitude: quaternion(T, "quat_nb", m.quat_nb)?,
-            std_rad: Vector3::from(m.std_rad),
+            std_rad: Vector::from_array(m.std_rad),
             gyro_bias_rad_s: vector(T, "gyro_bias_rad_s", m.gyro_bias_rad_s, limits::GYRO_RAD_S)?,
         })
     }
@@ -422,8 +409,8 @@ impl TryFrom<&NavSolution> for Nav {
             )?,
             vel_ned_m_s: vector(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?,
             attitude,
-            pos_std_ned_m: Vector3::from(m.pos_std_ned_m),
-            vel_std_ned_m_s: Vector3::from(m.vel_std_ned_m_s),
+            pos_std_ned_m: Vector::from_array(m.pos_std_ned_m),
+            vel_std_ned_m_s: Vector::from_array(m.vel_std_ned_m_s),
             predicted_drift_m: scalar(T, "predicted_drift_m", m.predicted_drift_m, 0.0, STD_MAX)?,
             aiding_mode: m.aiding_mode,
         })

@@ -3,8 +3,8 @@
 //! direction for inputs, wire to checked domain values, is [`crate::checked`].)
 //! The header's `seq`, `source` and `instance` are the publisher's to fill in.
 
+use nauta_estimation::AttitudeStateSnapshot;
 use nauta_estimation::attitude_core::AttitudeReport;
-use nauta_estimation::{AttitudeStateSnapshot, quat_to_wxyz};
 
 use crate::{AttitudeEstimate, AttitudeSnapshot, Header, Role, calibration};
 
@@ -20,9 +20,9 @@ impl From<&AttitudeReport> for AttitudeEstimate {
         }
         AttitudeEstimate {
             header: Header::new(r.stamp_ns, 0, Role::Attitude, 0),
-            quat_nb: quat_to_wxyz(&r.estimate.q_nb),
-            std_rad: r.estimate.std_rad.into(),
-            gyro_bias_rad_s: r.estimate.gyro_bias.into(),
+            quat_nb: r.estimate.q_nb.to_wxyz(),
+            std_rad: r.estimate.std_rad.to_array(),
+            gyro_bias_rad_s: r.estimate.gyro_bias.to_array(),
             calibration: bits,
             pad: 0,
         }

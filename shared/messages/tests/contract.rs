@@ -112,7 +112,7 @@ fn imu() -> ImuSample {
 fn valid_imu_converts() {
     let d = checked::Imu::try_from(&imu()).expect("valid");
     assert_eq!(d.stamp_ns, 10_000_000);
-    assert!((d.accel_m_s2.z + 9.81).abs() < 1e-12);
+    assert!((d.accel_m_s2.z() + 9.81).abs() < 1e-12);
 }
 
 #[test]
@@ -211,7 +211,7 @@ fn quaternions_must_be_unit() {
     assert!(checked::Attitude::try_from(&a).is_ok());
     a.quat_nb = [1.0005, 0.0, 0.0, 0.0]; // rounding: accepted and renormalised
     let q = checked::Attitude::try_from(&a).expect("near unit").attitude;
-    assert!((q.into_inner().norm() - 1.0).abs() < 1e-15);
+    assert!((q.as_nalgebra().into_inner().norm() - 1.0).abs() < 1e-15);
     a.quat_nb = [0.9, 0.1, 0.0, 0.0];
     let e = checked::Attitude::try_from(&a).unwrap_err();
     assert_eq!(e.kind(), "non-unit-quaternion");

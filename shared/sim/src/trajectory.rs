@@ -45,6 +45,7 @@ use nauta_estimation::attitude::{from_euler, to_euler};
 use nauta_estimation::earth::{
     earth_rate_ned, meridian_radius, normal_gravity, transport_rate_ned,
 };
+use nauta_estimation::frames::{Rotation, Vector};
 use nauta_estimation::strapdown::StrapdownState;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -127,8 +128,8 @@ impl Truth {
     /// The truth as a strapdown navigation state (e.g. to start an INS).
     pub fn strapdown_state(&self) -> StrapdownState {
         StrapdownState::at_depth(
-            self.q_nb,
-            self.v_ned_m_s,
+            Rotation::from_nalgebra(self.q_nb),
+            Vector::from_nalgebra(self.v_ned_m_s),
             self.lat_rad,
             self.lon_rad,
             self.depth_m,

@@ -33,6 +33,7 @@ use nalgebra::Vector3;
 use crate::alignment::Alignment;
 use crate::calibration::MagCalibration;
 use crate::earth::earth_rate_ned;
+use crate::frames::Vector;
 use crate::mekf::{MagneticReference, Mekf, MekfConfig};
 use crate::pf::{ParticleFilter, PfConfig};
 use crate::readings::Imu;
@@ -218,7 +219,7 @@ impl AttitudeCore {
     /// Processes one checked IMU sample; returns the estimate once aligned.
     pub fn step(&mut self, imu: &Imu) -> anyhow::Result<Option<AttitudeOutput>> {
         let imu = &Imu {
-            mag_ut: self.magnetometer.apply(&imu.mag_ut),
+            mag_ut: Vector::from_nalgebra(self.magnetometer.apply(imu.mag_ut.as_nalgebra())),
             ..*imu
         };
         if let Phase::Restoring(snapshot, after) = &self.phase {
@@ -246,8 +247,8 @@ impl AttitudeCore {
         match &mut self.phase {
             Phase::Restoring(..) => Ok(None),
             Phase::Aligning(a, gyro) => {
-                a.push(&imu.accel_m_s2, &imu.mag_ut)?;
-                gyro.push(&imu.gyro_rad_s, imu.interval_s);
+                a.push(imu.accel_m_s2.as_nalgebra(), imu.mag_ut.as_nalgebra())?;
+                gyro.push(imu.gyro_rad_s.as_nalgebra(), imu.interval_s);
                 if a.count() >= self.alignment_samples {
                     let est = start(
                         self.variant,
@@ -307,10 +308,11 @@ fn restore(
     let (q, _) = snapshot
         .checked()
         .map_err(|e| anyhow::anyhow!("snapshot refused: {e}"))?;
+    let q = q.to_nalgebra();
     let mut est = match variant {
         Variant::Gyro => Filter::Gyro(GyroIntegrator::new(q, latitude_rad, stamp_ns)?),
         Variant::Mekf { config, .. } => {
-            let reference = MagneticReference::from_mean_field(&q, &first.mag_ut)?;
+            let reference = MagneticReference::from_mean_field(&q, first.mag_ut.as_nalgebra())?;
             Filter::Mekf(Box::new(Mekf::new(
                 &config,
                 q,
@@ -320,7 +322,7 @@ fn restore(
             )?))
         }
         Variant::Pf { config, .. } => {
-            let reference = MagneticReference::from_mean_field(&q, &first.mag_ut)?;
+            let reference = MagneticReference::from_mean_field(&q, first.mag_ut.as_nalgebra())?;
             Filter::Pf(Box::new(ParticleFilter::new(
                 &config,
                 q,

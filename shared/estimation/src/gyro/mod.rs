@@ -45,8 +45,9 @@ use thiserror::Error;
 use crate::attitude::kinematics::propagate_attitude;
 use crate::earth::earth_rate_ned;
 use crate::estimator::{
-    AttitudeEstimator, AttitudeOutput, AttitudeRestoreError, AttitudeStateSnapshot, quat_to_wxyz,
+    AttitudeEstimator, AttitudeOutput, AttitudeRestoreError, AttitudeStateSnapshot,
 };
+use crate::frames::{Frd, Ned, Rotation, Vector};
 
 #[cfg(test)]
 mod tests;
@@ -243,7 +244,7 @@ impl GyroIntegrator {
     /// The state as plain numbers.
     pub fn state(&self) -> GyroState {
         GyroState {
-            q: quat_to_wxyz(&self.q_nb),
+            q: Rotation::<Frd, Ned>::from_nalgebra(self.q_nb).to_wxyz(),
             gyro_bias: self.gyro_bias.into(),
             last_stamp_ns: self.last_stamp_ns,
         }
@@ -260,8 +261,8 @@ impl GyroIntegrator {
             calibration: 0,
         }
         .checked()?;
-        self.q_nb = q_nb;
-        self.gyro_bias = gyro_bias;
+        self.q_nb = q_nb.to_nalgebra();
+        self.gyro_bias = gyro_bias.to_nalgebra();
         self.last_stamp_ns = s.last_stamp_ns;
         Ok(())
     }
@@ -271,8 +272,8 @@ impl AttitudeEstimator for GyroIntegrator {
     /// [`GyroIntegrator::propagate`]; the stamp advances by `dt_s` rounded to the
     /// nanosecond. A refused sample (non-finite rate, interval not positive) leaves
     /// the state unchanged and is counted in [`GyroIntegrator::rejected_count`].
-    fn predict(&mut self, gyro_rad_s: &Vector3<f64>, dt_s: f64) {
-        match self.propagate(gyro_rad_s, dt_s) {
+    fn predict(&mut self, gyro_rad_s: &Vector<Frd>, dt_s: f64) {
+        match self.propagate(gyro_rad_s.as_nalgebra(), dt_s) {
             Ok(()) => {
                 // dt_s is positive and finite here; `as` saturates absurd values.
                 let dt_ns = (dt_s * 1e9).round() as u64;
@@ -284,21 +285,21 @@ impl AttitudeEstimator for GyroIntegrator {
 
     /// Does nothing: pure gyro integration takes no aiding (it is the unaided
     /// baseline of paper 000 Table I).
-    fn update(&mut self, _accel_m_s2: &Vector3<f64>, _mag_ut: &Vector3<f64>) {}
+    fn update(&mut self, _accel_m_s2: &Vector<Frd>, _mag_ut: &Vector<Frd>) {}
 
     /// Attitude and bias; `std_rad` is zero (no uncertainty model: "unknown").
     fn estimate(&self) -> AttitudeOutput {
         AttitudeOutput {
-            q_nb: self.q_nb,
-            std_rad: Vector3::zeros(),
-            gyro_bias: self.gyro_bias,
+            q_nb: Rotation::from_nalgebra(self.q_nb),
+            std_rad: Vector::zeros(),
+            gyro_bias: Vector::from_nalgebra(self.gyro_bias),
         }
     }
 
     /// Attitude, bias, calibration bits; the covariance is all zeros (unknown).
     fn snapshot(&self) -> AttitudeStateSnapshot {
         AttitudeStateSnapshot {
-            q: quat_to_wxyz(&self.q_nb),
+            q: Rotation::<Frd, Ned>::from_nalgebra(self.q_nb).to_wxyz(),
             gyro_bias: self.gyro_bias.into(),
             covariance: [[0.0; 6]; 6],
             calibration: self.calibration,
@@ -309,8 +310,8 @@ impl AttitudeEstimator for GyroIntegrator {
     /// site and the stamp (set it with [`GyroIntegrator::set_last_stamp_ns`]).
     fn restore(&mut self, s: &AttitudeStateSnapshot) -> Result<(), AttitudeRestoreError> {
         let (q_nb, gyro_bias) = s.checked()?;
-        self.q_nb = q_nb;
-        self.gyro_bias = gyro_bias;
+        self.q_nb = q_nb.to_nalgebra();
+        self.gyro_bias = gyro_bias.to_nalgebra();
         self.calibration = s.calibration;
         Ok(())
     }

@@ -2,6 +2,7 @@
 //! samples made from a truth attitude sequence with
 //! [`body_rate_with_earth`] are integrated back to that truth.
 
+use crate::frames::Vector;
 use std::f64::consts::PI;
 
 use nalgebra::{UnitQuaternion, Vector3};
@@ -216,8 +217,11 @@ fn refuses_bad_samples_and_keeps_state() {
         Err(GyroIntegrateError::BadInterval(_))
     ));
     assert_eq!(est, before);
-    est.predict(&Vector3::new(0.0, f64::INFINITY, 0.0), 0.01);
-    est.predict(&Vector3::zeros(), -0.01);
+    est.predict(
+        &Vector::from_nalgebra(Vector3::new(0.0, f64::INFINITY, 0.0)),
+        0.01,
+    );
+    est.predict(&Vector::from_nalgebra(Vector3::zeros()), -0.01);
     assert_eq!(est.rejected_count(), 2);
     assert_eq!(est.q_nb(), before.q_nb());
     assert_eq!(est.last_stamp_ns(), 1_000);
@@ -252,19 +256,19 @@ fn trait_predict_matches_integrate_and_advances_the_stamp() {
     for k in 1..=500u64 {
         let g = scripted_omega_nb(k as f64 * 0.01);
         a.integrate(5_000 + k * DT_NS, &g).expect("valid");
-        AttitudeEstimator::predict(&mut b, &g, dt_s());
+        AttitudeEstimator::predict(&mut b, &Vector::from_nalgebra(g), dt_s());
     }
     assert_eq!(a, b);
     assert_eq!(b.last_stamp_ns(), 5_000 + 500 * DT_NS);
     // Aiding is ignored.
     b.update(
-        &Vector3::new(0.0, 0.0, -9.8),
-        &Vector3::new(20.0, 0.0, 40.0),
+        &Vector::from_nalgebra(Vector3::new(0.0, 0.0, -9.8)),
+        &Vector::from_nalgebra(Vector3::new(20.0, 0.0, 40.0)),
     );
     assert_eq!(a, b);
     let out = b.estimate();
-    assert_eq!(out.q_nb, b.q_nb());
-    assert_eq!(out.std_rad, Vector3::zeros());
+    assert_eq!(out.q_nb.to_nalgebra(), b.q_nb());
+    assert_eq!(out.std_rad, Vector::zeros());
 }
 
 /// Runs a fixed pseudo-random sequence; optionally checkpoints at `split` through

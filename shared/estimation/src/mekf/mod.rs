@@ -150,15 +150,16 @@ mod tests;
 
 pub use params::{MekfConfig, MekfParams, MekfParamsError};
 
-use nalgebra::{Matrix3, Matrix6, Quaternion, SMatrix, SVector, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, UnitQuaternion, Vector3, Vector6};
 use thiserror::Error;
 
 use crate::attitude::kinematics::propagate_attitude;
 use crate::attitude::{quat_from_rotation_vector, wrap_pi};
 use crate::earth::{earth_rate_ned, normal_gravity};
 use crate::estimator::{
-    AttitudeEstimator, AttitudeOutput, AttitudeRestoreError, AttitudeStateSnapshot, quat_to_wxyz,
+    AttitudeEstimator, AttitudeOutput, AttitudeRestoreError, AttitudeStateSnapshot,
 };
+use crate::frames::{Frd, Rotation, Vector};
 
 /// The field the magnetometer should see: its norm and dip, e.g. measured during
 /// the static alignment ([`MagneticReference::from_mean_field`]).
@@ -668,21 +669,21 @@ fn snapshot_covariance(c: &[[f64; 6]; 6]) -> Result<Option<Matrix6<f64>>, Attitu
 impl AttitudeEstimator for Mekf {
     /// [`Mekf::propagate`]; a refused sample is counted in
     /// [`MekfStats::predict_rejected`].
-    fn predict(&mut self, gyro_rad_s: &Vector3<f64>, dt_s: f64) {
-        if self.propagate(gyro_rad_s, dt_s).is_err() {
+    fn predict(&mut self, gyro_rad_s: &Vector<Frd>, dt_s: f64) {
+        if self.propagate(gyro_rad_s.as_nalgebra(), dt_s).is_err() {
             self.stats.predict_rejected += 1;
         }
     }
 
     /// [`Mekf::update_gravity`] then [`Mekf::update_heading`], each counted in
     /// [`MekfStats`]; either may be refused on its own.
-    fn update(&mut self, accel_m_s2: &Vector3<f64>, mag_ut: &Vector3<f64>) {
-        match self.update_gravity(accel_m_s2) {
+    fn update(&mut self, accel_m_s2: &Vector<Frd>, mag_ut: &Vector<Frd>) {
+        match self.update_gravity(accel_m_s2.as_nalgebra()) {
             Ok(()) => self.stats.gravity_used += 1,
             Err(GravityUpdateError::Gated { .. }) => self.stats.gravity_gated += 1,
             Err(_) => self.stats.gravity_invalid += 1,
         }
-        match self.update_heading(mag_ut) {
+        match self.update_heading(mag_ut.as_nalgebra()) {
             Ok(()) => self.stats.heading_used += 1,
             Err(HeadingUpdateError::NormGated { .. } | HeadingUpdateError::DipGated { .. }) => {
                 self.stats.heading_gated += 1
@@ -695,9 +696,11 @@ impl AttitudeEstimator for Mekf {
     /// the bias.
     fn estimate(&self) -> AttitudeOutput {
         AttitudeOutput {
-            q_nb: self.q_nb,
-            std_rad: Vector3::new(self.p[(0, 0)], self.p[(1, 1)], self.p[(2, 2)]).map(f64::sqrt),
-            gyro_bias: self.gyro_bias,
+            q_nb: Rotation::from_nalgebra(self.q_nb),
+            std_rad: Vector::from_nalgebra(
+                Vector3::new(self.p[(0, 0)], self.p[(1, 1)], self.p[(2, 2)]).map(f64::sqrt),
+            ),
+            gyro_bias: Vector::from_nalgebra(self.gyro_bias),
         }
     }
 
@@ -710,7 +713,7 @@ impl AttitudeEstimator for Mekf {
             }
         }
         AttitudeStateSnapshot {
-            q: quat_to_wxyz(&self.q_nb),
+            q: Rotation::<Frd, crate::frames::Ned>::from_nalgebra(self.q_nb).to_wxyz(),
             gyro_bias: self.gyro_bias.into(),
             covariance,
             calibration: self.calibration,
@@ -731,13 +734,10 @@ impl AttitudeEstimator for Mekf {
         let p = snapshot_covariance(&s.covariance)?.unwrap_or_else(|| {
             initial_covariance(&self.config, self.config.initial_bias_std_rad_s)
         });
-        let raw = Quaternion::new(s.q[0], s.q[1], s.q[2], s.q[3]);
-        self.q_nb = if (raw.norm() - 1.0).abs() <= 4.0 * f64::EPSILON {
-            UnitQuaternion::new_unchecked(raw)
-        } else {
-            q_checked
-        };
-        self.gyro_bias = gyro_bias;
+        self.q_nb = Rotation::from_wxyz_exact(s.q)
+            .unwrap_or(q_checked)
+            .to_nalgebra();
+        self.gyro_bias = gyro_bias.to_nalgebra();
         self.p = p;
         self.calibration = s.calibration;
         Ok(())

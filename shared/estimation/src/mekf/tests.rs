@@ -4,6 +4,7 @@
 //! the middle of each interval (an interval average, DESIGN §4), and the field
 //! at the end of it, with noise drawn from a seeded ChaCha8 generator.
 
+use crate::frames::Vector;
 use std::f64::consts::PI;
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -172,8 +173,11 @@ fn nav_error(est: &UnitQuaternion<f64>, truth: &UnitQuaternion<f64>) -> Vector3<
 }
 
 fn step(f: &mut Mekf, s: &Sample) {
-    f.predict(&s.gyro, DT);
-    f.update(&s.accel, &s.mag);
+    f.predict(&Vector::from_nalgebra(s.gyro), DT);
+    f.update(
+        &Vector::from_nalgebra(s.accel),
+        &Vector::from_nalgebra(s.mag),
+    );
 }
 
 #[test]
@@ -365,13 +369,13 @@ fn converges_from_ten_degrees_still() {
         e.roll_rad.to_degrees(),
         e.pitch_rad.to_degrees(),
         e.yaw_rad.to_degrees(),
-        f.estimate().std_rad.map(f64::to_degrees)
+        f.estimate().std_rad.to_nalgebra().map(f64::to_degrees)
     );
     // Within 0.5° in the first second, then at the noise level: the tilt std is
     // ~0.1° with the default 0.3 m/s² of unmodelled acceleration, which makes the
     // tilt lean on the gyro.
     assert!(settled_at.is_some_and(|k| k < 100), "{settled_at:?}");
-    let std = f.estimate().std_rad;
+    let std = f.estimate().std_rad.to_nalgebra();
     assert!(
         std.x.to_degrees() < 0.15 && std.z.to_degrees() < 0.15,
         "{std:?}"
@@ -523,7 +527,7 @@ fn snapshot_restore_continues_bit_for_bit() {
     let split = run_with_split(Some(5_000));
     assert_eq!(straight.len(), split.len());
     let bits = |o: &AttitudeOutput, s: &AttitudeStateSnapshot| {
-        let mut v: Vec<u64> = quat_to_wxyz(&o.q_nb).iter().map(|x| x.to_bits()).collect();
+        let mut v: Vec<u64> = o.q_nb.to_wxyz().iter().map(|x| x.to_bits()).collect();
         v.extend(
             o.std_rad
                 .iter()
@@ -587,8 +591,8 @@ fn disturbed_run(disturb: fn(Vector3<f64>) -> Vector3<f64>) -> (f64, f64, f64, M
         } else {
             s.mag
         };
-        dirty.predict(&s.gyro, DT);
-        dirty.update(&s.accel, &mag);
+        dirty.predict(&Vector::from_nalgebra(s.gyro), DT);
+        dirty.update(&Vector::from_nalgebra(s.accel), &Vector::from_nalgebra(mag));
         if k < 6_000 {
             continue; // the start's transient: the heading's prior is 5°
         }
@@ -664,25 +668,28 @@ fn invalid_input_does_not_corrupt_the_state() {
         f.propagate(&Vector3::zeros(), 0.0),
         Err(MekfPropagateError::BadInterval(0.0))
     );
-    f.predict(&nan, DT);
-    f.predict(&inf, DT);
-    f.predict(&Vector3::zeros(), 0.0);
-    f.predict(&Vector3::zeros(), -DT);
-    f.predict(&Vector3::zeros(), f64::NAN);
-    f.predict(&Vector3::zeros(), f64::INFINITY);
-    f.update(&Vector3::zeros(), &Vector3::zeros());
-    f.update(&nan, &inf);
+    f.predict(&Vector::from_nalgebra(nan), DT);
+    f.predict(&Vector::from_nalgebra(inf), DT);
+    f.predict(&Vector::from_nalgebra(Vector3::zeros()), 0.0);
+    f.predict(&Vector::from_nalgebra(Vector3::zeros()), -DT);
+    f.predict(&Vector::from_nalgebra(Vector3::zeros()), f64::NAN);
+    f.predict(&Vector::from_nalgebra(Vector3::zeros()), f64::INFINITY);
     f.update(
-        &Vector3::new(1e-300, 0.0, 0.0),
-        &Vector3::new(0.0, 0.0, 1e-300),
+        &Vector::from_nalgebra(Vector3::zeros()),
+        &Vector::from_nalgebra(Vector3::zeros()),
+    );
+    f.update(&Vector::from_nalgebra(nan), &Vector::from_nalgebra(inf));
+    f.update(
+        &Vector::from_nalgebra(Vector3::new(1e-300, 0.0, 0.0)),
+        &Vector::from_nalgebra(Vector3::new(0.0, 0.0, 1e-300)),
     );
     f.update(
-        &Vector3::new(0.0, 0.0, -1e300),
-        &Vector3::new(1e300, 0.0, 0.0),
+        &Vector::from_nalgebra(Vector3::new(0.0, 0.0, -1e300)),
+        &Vector::from_nalgebra(Vector3::new(1e300, 0.0, 0.0)),
     );
     f.update(
-        &Vector3::new(0.0, 0.0, f64::MAX),
-        &Vector3::new(f64::MAX, f64::MAX, 0.0),
+        &Vector::from_nalgebra(Vector3::new(0.0, 0.0, f64::MAX)),
+        &Vector::from_nalgebra(Vector3::new(f64::MAX, f64::MAX, 0.0)),
     );
     assert_eq!((f.q_nb(), f.gyro_bias(), *f.covariance()), before);
     let st = f.stats();
@@ -703,7 +710,7 @@ fn invalid_input_does_not_corrupt_the_state() {
         step(&mut f, &synth.step());
     }
     let out = f.estimate();
-    assert!(out.q_nb.coords.iter().all(|v| v.is_finite()));
+    assert!(out.q_nb.as_nalgebra().coords.iter().all(|v| v.is_finite()));
     assert!(out.std_rad.iter().all(|v| v.is_finite() && *v > 0.0));
     assert!(AttitudeError::between(&f.q_nb(), &synth.truth).total_rad < 0.01);
 }

@@ -187,7 +187,7 @@ mod tests;
 pub use aiding::{AidingError, aiding_quaternion, tilt_quaternions};
 pub use params::{MAX_PARTICLES, PfConfig, PfParams, PfParamsError};
 
-use nalgebra::{Matrix6, Quaternion, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -196,8 +196,9 @@ use thiserror::Error;
 use crate::attitude::{quat_from_rotation_vector, wrap_pi};
 use crate::earth::{earth_rate_ned, normal_gravity};
 use crate::estimator::{
-    AttitudeEstimator, AttitudeOutput, AttitudeRestoreError, AttitudeStateSnapshot, quat_to_wxyz,
+    AttitudeEstimator, AttitudeOutput, AttitudeRestoreError, AttitudeStateSnapshot,
 };
+use crate::frames::{Frd, Ned, Rotation, Vector};
 use crate::mekf::MagneticReference;
 
 /// Samples between two draws of the bias random walk (P1).
@@ -364,12 +365,15 @@ fn qmul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
     ]
 }
 
+/// A particle's attitude (body → NED) as its stored `[w, x, y, z]`.
 fn to_array(q: &UnitQuaternion<f64>) -> [f64; 4] {
-    [q.w, q.i, q.j, q.k]
+    Rotation::<Frd, Ned>::from_nalgebra(*q).to_wxyz()
 }
 
+/// A stored `[w, x, y, z]` as a unit quaternion (renormalised, unchecked: the
+/// filter's own arithmetic keeps it finite).
 fn to_unit(q: &[f64; 4]) -> UnitQuaternion<f64> {
-    UnitQuaternion::new_normalize(Quaternion::new(q[0], q[1], q[2], q[3]))
+    UnitQuaternion::new_normalize(Rotation::<Frd, Ned>::quaternion_from_wxyz(*q))
 }
 
 /// FNV-1a over 64-bit words: mixes a snapshot into the restore seed.
@@ -697,7 +701,7 @@ impl ParticleFilter {
     /// Takes the estimate and spread from accumulated moments (unchanged if
     /// they are not finite).
     fn finish_moments(&mut self, m: &Moments) {
-        let q = Quaternion::new(m.q[0], m.q[1], m.q[2], m.q[3]);
+        let q = Rotation::<Frd, Ned>::quaternion_from_wxyz(m.q);
         if q.norm() > 0.0 && q.coords.iter().all(|v| v.is_finite()) {
             self.q_hat = UnitQuaternion::new_normalize(q);
         }
@@ -1065,24 +1069,24 @@ impl ParticleFilter {
 impl AttitudeEstimator for ParticleFilter {
     /// [`ParticleFilter::propagate`]; a refused sample is counted in
     /// [`PfStats::predict_rejected`].
-    fn predict(&mut self, gyro_rad_s: &Vector3<f64>, dt_s: f64) {
-        if self.propagate(gyro_rad_s, dt_s).is_err() {
+    fn predict(&mut self, gyro_rad_s: &Vector<Frd>, dt_s: f64) {
+        if self.propagate(gyro_rad_s.as_nalgebra(), dt_s).is_err() {
             self.stats.predict_rejected += 1;
         }
     }
 
     /// [`ParticleFilter::update_aiding`] (counted in [`PfStats`]).
-    fn update(&mut self, accel_m_s2: &Vector3<f64>, mag_ut: &Vector3<f64>) {
-        self.update_aiding(accel_m_s2, mag_ut);
+    fn update(&mut self, accel_m_s2: &Vector<Frd>, mag_ut: &Vector<Frd>) {
+        self.update_aiding(accel_m_s2.as_nalgebra(), mag_ut.as_nalgebra());
     }
 
     /// The weighted-mean attitude and bias; `std_rad` from the particles'
     /// weighted spread about the estimate (N, E, D).
     fn estimate(&self) -> AttitudeOutput {
         AttitudeOutput {
-            q_nb: self.q_hat,
-            std_rad: self.spread,
-            gyro_bias: self.bias_hat,
+            q_nb: Rotation::from_nalgebra(self.q_hat),
+            std_rad: Vector::from_nalgebra(self.spread),
+            gyro_bias: Vector::from_nalgebra(self.bias_hat),
         }
     }
 
@@ -1097,7 +1101,7 @@ impl AttitudeEstimator for ParticleFilter {
             }
         }
         AttitudeStateSnapshot {
-            q: quat_to_wxyz(&self.q_hat),
+            q: to_array(&self.q_hat),
             gyro_bias: self.bias_hat.into(),
             covariance,
             calibration: self.calibration,
@@ -1112,6 +1116,7 @@ impl AttitudeEstimator for ParticleFilter {
     /// site and magnetic reference; the rest detector starts over.
     fn restore(&mut self, s: &AttitudeStateSnapshot) -> Result<(), AttitudeRestoreError> {
         let (q, b) = s.checked()?;
+        let (q, b) = (q.to_nalgebra(), b.to_nalgebra());
         let cov = Matrix6::from_fn(|i, j| s.covariance[i][j]);
         let cov = if cov.iter().all(|v| *v == 0.0) {
             let t = self.config.initial_tilt_std_rad;
@@ -1144,12 +1149,7 @@ impl AttitudeEstimator for ParticleFilter {
         self.draw_particles(&q, &b, &cov);
         // The snapshot's quaternion bit for bit when it is unit to rounding
         // (a restored instance continues from exactly the published state).
-        let raw = Quaternion::new(s.q[0], s.q[1], s.q[2], s.q[3]);
-        self.q_hat = if (raw.norm() - 1.0).abs() <= 4.0 * f64::EPSILON {
-            UnitQuaternion::new_unchecked(raw)
-        } else {
-            q
-        };
+        self.q_hat = Rotation::<Frd, Ned>::from_wxyz_exact(s.q).map_or(q, Rotation::to_nalgebra);
         self.bias_hat = b;
         self.calibration = s.calibration;
         self.last_gyro = None;

@@ -4,6 +4,7 @@
 //! specific force at the middle of each interval and the field at its end,
 //! noise from a seeded ChaCha8 generator.
 
+use crate::frames::Vector;
 use std::f64::consts::PI;
 
 use nalgebra::{Matrix6, UnitQuaternion, Vector3};
@@ -143,8 +144,11 @@ fn rocking(t: f64) -> Vector3<f64> {
 }
 
 fn step(f: &mut ParticleFilter, s: &Sample) {
-    f.predict(&s.gyro, DT);
-    f.update(&s.accel, &s.mag);
+    f.predict(&Vector::from_nalgebra(s.gyro), DT);
+    f.update(
+        &Vector::from_nalgebra(s.accel),
+        &Vector::from_nalgebra(s.mag),
+    );
 }
 
 fn error_deg(f: &ParticleFilter, truth: &UnitQuaternion<f64>) -> AttitudeError {
@@ -367,7 +371,8 @@ fn run(seed: u64, samples: usize) -> Vec<[u64; 10]> {
             let o = f.estimate();
             let mut v = [0u64; 10];
             for (slot, x) in v.iter_mut().zip(
-                quat_to_wxyz(&o.q_nb)
+                o.q_nb
+                    .to_wxyz()
                     .into_iter()
                     .chain(o.std_rad.iter().copied())
                     .chain(o.gyro_bias.iter().copied()),
@@ -491,8 +496,8 @@ fn disturbed_run(disturb: fn(&Sample) -> (Vector3<f64>, Vector3<f64>)) -> (f64, 
         } else {
             (s.accel, s.mag)
         };
-        f.predict(&s.gyro, DT);
-        f.update(&accel, &mag);
+        f.predict(&Vector::from_nalgebra(s.gyro), DT);
+        f.update(&Vector::from_nalgebra(accel), &Vector::from_nalgebra(mag));
         if k >= 3_000 {
             let e = error_deg(&f, &s.truth);
 
@@ -566,8 +571,11 @@ fn repeated_field_samples_are_not_used() {
         if k % 3 == 0 {
             held = s.mag;
         }
-        f.predict(&s.gyro, DT);
-        f.update(&s.accel, &held);
+        f.predict(&Vector::from_nalgebra(s.gyro), DT);
+        f.update(
+            &Vector::from_nalgebra(s.accel),
+            &Vector::from_nalgebra(held),
+        );
     }
     assert_eq!(f.stats().heading_repeated, 200);
     assert_eq!(f.stats().heading_used, 100);
@@ -591,18 +599,21 @@ fn invalid_input_does_not_corrupt_the_state() {
         f.propagate(&Vector3::zeros(), 0.0),
         Err(PfPropagateError::BadInterval(0.0))
     );
-    f.predict(&inf, DT);
-    f.predict(&Vector3::zeros(), -DT);
-    f.predict(&Vector3::zeros(), f64::NAN);
+    f.predict(&Vector::from_nalgebra(inf), DT);
+    f.predict(&Vector::from_nalgebra(Vector3::zeros()), -DT);
+    f.predict(&Vector::from_nalgebra(Vector3::zeros()), f64::NAN);
     assert_eq!(f.stats().predict_rejected, 3);
-    f.update(&Vector3::zeros(), &Vector3::zeros());
-    f.update(&nan, &inf);
+    f.update(
+        &Vector::from_nalgebra(Vector3::zeros()),
+        &Vector::from_nalgebra(Vector3::zeros()),
+    );
+    f.update(&Vector::from_nalgebra(nan), &Vector::from_nalgebra(inf));
     assert_eq!((f.q_nb(), f.gyro_bias(), f.particles.clone()), before);
     for _ in 0..300 {
         step(&mut f, &synth.step());
     }
     let out = f.estimate();
-    assert!(out.q_nb.coords.iter().all(|v| v.is_finite()));
+    assert!(out.q_nb.as_nalgebra().coords.iter().all(|v| v.is_finite()));
     assert!(AttitudeError::between(&f.q_nb(), &synth.truth).total_rad < 0.01);
 }
 

@@ -79,7 +79,9 @@
 //! - NED is singular at the poles (`tan L`, `sec L`): states beyond
 //!   [`MAX_ABS_LATITUDE_RAD`] are refused.
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::Vector3;
+
+use crate::frames::{Frd, Ned, Rotation, Vector};
 use thiserror::Error;
 
 use crate::attitude::kinematics::propagate_attitude;
@@ -114,9 +116,9 @@ pub const MAX_QUATERNION_NORM_ERROR: f64 = 1e-6;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StrapdownState {
     /// Attitude, body (FRD) → NED.
-    pub q_nb: UnitQuaternion<f64>,
+    pub q_nb: Rotation<Frd, Ned>,
     /// Velocity relative to the Earth, NED, m/s.
-    pub v_ned_m_s: Vector3<f64>,
+    pub v_ned_m_s: Vector<Ned>,
     /// Geodetic latitude (WGS84), rad.
     pub lat_rad: f64,
     /// Longitude, rad, kept in [-π, π).
@@ -128,8 +130,8 @@ pub struct StrapdownState {
 impl StrapdownState {
     /// A state at `depth_m` below the ellipsoid (`height = -depth`).
     pub fn at_depth(
-        q_nb: UnitQuaternion<f64>,
-        v_ned_m_s: Vector3<f64>,
+        q_nb: Rotation<Frd, Ned>,
+        v_ned_m_s: Vector<Ned>,
         lat_rad: f64,
         lon_rad: f64,
         depth_m: f64,
@@ -156,14 +158,14 @@ impl StrapdownState {
     /// Checks what the mechanization needs: every number finite, `q_nb` unit to
     /// [`MAX_QUATERNION_NORM_ERROR`], |latitude| ≤ [`MAX_ABS_LATITUDE_RAD`].
     pub fn validate(&self) -> Result<(), StrapdownError> {
-        let finite = self.q_nb.coords.iter().all(|v| v.is_finite())
+        let finite = self.q_nb.as_nalgebra().coords.iter().all(|v| v.is_finite())
             && self.v_ned_m_s.iter().all(|v| v.is_finite())
             && self.lon_rad.is_finite()
             && self.height_m.is_finite();
         if !finite {
             return Err(StrapdownError::NonFiniteState);
         }
-        let norm = self.q_nb.coords.norm();
+        let norm = self.q_nb.as_nalgebra().coords.norm();
         if !((norm - 1.0).abs() <= MAX_QUATERNION_NORM_ERROR) {
             return Err(StrapdownError::NotUnitQuaternion(norm));
         }
@@ -211,7 +213,7 @@ pub struct Propagated {
     pub state: StrapdownState,
     /// The interval's specific force resolved in NED at mid-interval,
     /// `C_b^n(q_m) f̄`, m/s² (what an error-state filter's transition matrix needs).
-    pub specific_force_ned_m_s2: Vector3<f64>,
+    pub specific_force_ned_m_s2: Vector<Ned>,
 }
 
 fn validate_sample(
@@ -243,14 +245,18 @@ fn validate_sample(
 /// carry the latitude beyond [`MAX_ABS_LATITUDE_RAD`] is refused.
 pub fn propagate(
     prev: &StrapdownState,
-    gyro_rad_s: &Vector3<f64>,
-    accel_m_s2: &Vector3<f64>,
+    gyro_rad_s: &Vector<Frd>,
+    accel_m_s2: &Vector<Frd>,
     dt_s: f64,
 ) -> Result<Propagated, StrapdownError> {
+    // The arithmetic is nalgebra's on the bare components, frames checked at
+    // this boundary.
+    let (gyro_rad_s, accel_m_s2) = (gyro_rad_s.as_nalgebra(), accel_m_s2.as_nalgebra());
     validate_sample(gyro_rad_s, accel_m_s2, dt_s)?;
     prev.validate()?;
 
-    let (lat0, h0, v0) = (prev.lat_rad, prev.height_m, prev.v_ned_m_s);
+    let q_nb0 = prev.q_nb.as_nalgebra();
+    let (lat0, h0, v0) = (prev.lat_rad, prev.height_m, prev.v_ned_m_s.to_nalgebra());
     let r_n0 = meridian_radius(lat0) + h0;
 
     // Predictor-corrector on the mid-interval velocity and position.
@@ -266,13 +272,13 @@ pub fn propagate(
         let omega_ie_n = earth_rate_ned(lat_m);
         let omega_en_n = transport_rate_ned(lat_m, h_m, &v_m);
         omega_in_n = omega_ie_n + omega_en_n;
-        let q_m = propagate_attitude(&prev.q_nb, gyro_rad_s, &omega_in_n, 0.5 * dt_s);
+        let q_m = propagate_attitude(q_nb0, gyro_rad_s, &omega_in_n, 0.5 * dt_s);
         f_n = q_m * accel_m_s2;
         let g_n = Vector3::new(0.0, 0.0, normal_gravity(lat_m, h_m));
         let coriolis = (2.0 * omega_ie_n + omega_en_n).cross(&v_m);
         v1 = v0 + (f_n + g_n - coriolis) * dt_s;
     }
-    let q1 = propagate_attitude(&prev.q_nb, gyro_rad_s, &omega_in_n, dt_s);
+    let q1 = propagate_attitude(q_nb0, gyro_rad_s, &omega_in_n, dt_s);
 
     // Trapezoidal position update, radii at mid-interval.
     let v_avg = 0.5 * (v0 + v1);
@@ -284,8 +290,8 @@ pub fn propagate(
     let lon1 = prev.lon_rad + v_avg.y * dt_s / ((transverse_radius(lat_m) + h_m) * lat_m.cos());
 
     let state = StrapdownState {
-        q_nb: q1,
-        v_ned_m_s: v1,
+        q_nb: Rotation::from_nalgebra(q1),
+        v_ned_m_s: Vector::from_nalgebra(v1),
         lat_rad: lat1,
         lon_rad: wrap_pi(lon1),
         height_m: h1,
@@ -293,7 +299,7 @@ pub fn propagate(
     state.validate()?;
     Ok(Propagated {
         state,
-        specific_force_ned_m_s2: f_n,
+        specific_force_ned_m_s2: Vector::from_nalgebra(f_n),
     })
 }
 
@@ -302,7 +308,7 @@ pub fn propagate(
 #[derive(Debug, Clone, PartialEq)]
 pub struct Strapdown {
     state: StrapdownState,
-    specific_force_ned_m_s2: Vector3<f64>,
+    specific_force_ned_m_s2: Vector<Ned>,
     steps: u64,
     rejected: u64,
 }
@@ -314,7 +320,7 @@ impl Strapdown {
         state.validate()?;
         Ok(Self {
             state,
-            specific_force_ned_m_s2: Vector3::zeros(),
+            specific_force_ned_m_s2: Vector::zeros(),
             steps: 0,
             rejected: 0,
         })
@@ -328,8 +334,8 @@ impl Strapdown {
     /// [`Strapdown::rejected_count`].
     pub fn update(
         &mut self,
-        gyro_rad_s: &Vector3<f64>,
-        accel_m_s2: &Vector3<f64>,
+        gyro_rad_s: &Vector<Frd>,
+        accel_m_s2: &Vector<Frd>,
         dt_s: f64,
     ) -> Result<(), StrapdownError> {
         match propagate(&self.state, gyro_rad_s, accel_m_s2, dt_s) {
@@ -361,7 +367,7 @@ impl Strapdown {
 
     /// The last accepted sample's specific force in NED at mid-interval, m/s²
     /// (zero before the first).
-    pub fn specific_force_ned_m_s2(&self) -> Vector3<f64> {
+    pub fn specific_force_ned_m_s2(&self) -> Vector<Ned> {
         self.specific_force_ned_m_s2
     }
 

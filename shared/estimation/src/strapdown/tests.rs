@@ -174,8 +174,8 @@ struct Node {
 impl Node {
     fn state(&self) -> StrapdownState {
         StrapdownState {
-            q_nb: self.q_nb,
-            v_ned_m_s: self.v,
+            q_nb: Rotation::from_nalgebra(self.q_nb),
+            v_ned_m_s: Vector::from_nalgebra(self.v),
             lat_rad: self.lat,
             lon_rad: self.lon,
             height_m: self.h,
@@ -407,7 +407,12 @@ fn run(
         let (gyro, accel, end) = truth.next_imu(&node);
         o.distance_m += 0.5 * (node.v.xy().norm() + end.v.xy().norm()) * imu_dt;
         node = end;
-        ins.update(&gyro, &accel, imu_dt).expect("valid sample");
+        ins.update(
+            &Vector::from_nalgebra(gyro),
+            &Vector::from_nalgebra(accel),
+            imu_dt,
+        )
+        .expect("valid sample");
         let s = ins.state();
         let e = ned_error(&s, &node);
         o.max_horizontal_m = o.max_horizontal_m.max(e.xy().norm());
@@ -415,12 +420,12 @@ fn run(
         o.max_abs_ned_m = o.max_abs_ned_m.sup(&e.abs());
         o.max_att_rad = o
             .max_att_rad
-            .max(AttitudeError::between(&s.q_nb, &node.q_nb).total_rad);
+            .max(AttitudeError::between(s.q_nb.as_nalgebra(), &node.q_nb).total_rad);
     }
     let s = ins.state();
     o.final_ned_m = ned_error(&s, &node);
-    o.final_att_rad = AttitudeError::between(&s.q_nb, &node.q_nb).total_rad;
-    o.final_vel_m_s = s.v_ned_m_s - node.v;
+    o.final_att_rad = AttitudeError::between(s.q_nb.as_nalgebra(), &node.q_nb).total_rad;
+    o.final_vel_m_s = s.v_ned_m_s.to_nalgebra() - node.v;
     (o, ins, node)
 }
 
@@ -524,7 +529,13 @@ fn generator_agrees_with_the_ned_equations() {
 fn still_vehicle_stays_within_a_centimetre() {
     let p = still();
     let q = from_euler(3f64.to_radians(), (-2f64).to_radians(), 70f64.to_radians());
-    let start = StrapdownState::at_depth(q, Vector3::zeros(), p.lat0_rad, p.lon0_rad, 5.0);
+    let start = StrapdownState::at_depth(
+        Rotation::from_nalgebra(q),
+        Vector::zeros(),
+        p.lat0_rad,
+        p.lon0_rad,
+        5.0,
+    );
     // Exact still IMU: the Earth rate and the reaction to gravity, in body axes.
     let gyro = q.inverse_transform_vector(&earth_rate_ned(p.lat0_rad));
     let accel =
@@ -542,11 +553,16 @@ fn still_vehicle_stays_within_a_centimetre() {
         q_ib: q,
     };
     for _ in 0..60_000 {
-        ins.update(&gyro, &accel, 0.01).expect("valid");
+        ins.update(
+            &Vector::from_nalgebra(gyro),
+            &Vector::from_nalgebra(accel),
+            0.01,
+        )
+        .expect("valid");
         max_m = max_m.max(ned_error(&ins.state(), &truth).norm());
     }
     let s = ins.state();
-    let att = AttitudeError::between(&s.q_nb, &q).total_rad;
+    let att = AttitudeError::between(s.q_nb.as_nalgebra(), &q).total_rad;
     println!(
         "still 45N 10 min: max position error {max_m:.3e} m, final {:.3e} m, velocity {:.3e} m/s, attitude {:.3e} rad",
         ned_error(&s, &truth).norm(),
@@ -576,7 +592,9 @@ fn schuler_tilt_gives_the_expected_error() {
     let p = still();
     let tilt = 1e-6;
     let (o, _, truth) = run(p, 0.01, 600.0, |s| StrapdownState {
-        q_nb: quat_from_rotation_vector(&Vector3::new(tilt, 0.0, 0.0)) * s.q_nb,
+        q_nb: Rotation::from_nalgebra(
+            quat_from_rotation_vector(&Vector3::new(tilt, 0.0, 0.0)) * s.q_nb.to_nalgebra(),
+        ),
         ..s
     });
     report("Schuler 1e-6 rad tilt", &o);
@@ -597,13 +615,13 @@ fn schuler_tilt_gives_the_expected_error() {
 fn deterministic_and_pure() {
     let bits = |s: &StrapdownState| {
         [
-            s.q_nb.w,
-            s.q_nb.i,
-            s.q_nb.j,
-            s.q_nb.k,
-            s.v_ned_m_s.x,
-            s.v_ned_m_s.y,
-            s.v_ned_m_s.z,
+            s.q_nb.to_wxyz()[0],
+            s.q_nb.to_wxyz()[1],
+            s.q_nb.to_wxyz()[2],
+            s.q_nb.to_wxyz()[3],
+            s.v_ned_m_s.x(),
+            s.v_ned_m_s.y(),
+            s.v_ned_m_s.z(),
             s.lat_rad,
             s.lon_rad,
             s.height_m,
@@ -619,20 +637,31 @@ fn deterministic_and_pure() {
         Vector3::new(0.01, -0.02, 0.05),
         Vector3::new(0.3, 0.1, -9.8),
     );
-    let pure = propagate(&s0, &gyro, &accel, 0.01).expect("valid");
+    let pure = propagate(
+        &s0,
+        &Vector::from_nalgebra(gyro),
+        &Vector::from_nalgebra(accel),
+        0.01,
+    )
+    .expect("valid");
     let mut nav = Strapdown::new(s0).expect("valid");
-    nav.update(&gyro, &accel, 0.01).expect("valid");
+    nav.update(
+        &Vector::from_nalgebra(gyro),
+        &Vector::from_nalgebra(accel),
+        0.01,
+    )
+    .expect("valid");
     assert_eq!(bits(&pure.state), bits(&nav.state()));
     assert_eq!(pure.specific_force_ned_m_s2, nav.specific_force_ned_m_s2());
     // Resolved at the mid-interval attitude (the nav-frame half-turn, ~4e-7 rad, aside).
-    let q_m = s0.q_nb * quat_from_rotation_vector(&(gyro * 0.005));
-    assert!((pure.specific_force_ned_m_s2 - q_m * accel).norm() < 1e-5);
+    let q_m = s0.q_nb.to_nalgebra() * quat_from_rotation_vector(&(gyro * 0.005));
+    assert!((pure.specific_force_ned_m_s2.to_nalgebra() - q_m * accel).norm() < 1e-5);
 }
 
 fn sample_state() -> StrapdownState {
     StrapdownState::at_depth(
-        from_euler(0.1, -0.05, 1.0),
-        Vector3::new(1.0, 0.5, 0.1),
+        Rotation::from_euler(0.1, -0.05, 1.0),
+        Vector::new(1.0, 0.5, 0.1),
         0.67,
         -0.16,
         15.0,
@@ -648,15 +677,15 @@ fn refuses_bad_samples_and_keeps_the_state() {
     let nan = Vector3::new(f64::NAN, 0.0, 0.0);
     let inf = Vector3::new(0.0, f64::INFINITY, 0.0);
     assert_eq!(
-        nav.update(&nan, &a, 0.01),
+        nav.update(&Vector::from_nalgebra(nan), &Vector::from_nalgebra(a), 0.01),
         Err(StrapdownError::NonFiniteSample)
     );
     assert_eq!(
-        nav.update(&g, &inf, 0.01),
+        nav.update(&Vector::from_nalgebra(g), &Vector::from_nalgebra(inf), 0.01),
         Err(StrapdownError::NonFiniteSample)
     );
     for dt in [0.0, -0.01, f64::NAN, f64::INFINITY, 1.5] {
-        match nav.update(&g, &a, dt) {
+        match nav.update(&Vector::from_nalgebra(g), &Vector::from_nalgebra(a), dt) {
             Err(StrapdownError::BadInterval(x)) => {
                 assert!(x.to_bits() == dt.to_bits(), "{x} vs {dt}")
             }
@@ -664,18 +693,31 @@ fn refuses_bad_samples_and_keeps_the_state() {
         }
     }
     assert!(matches!(
-        nav.update(&Vector3::new(50.0, 0.0, 0.0), &a, 0.01),
+        nav.update(
+            &Vector::from_nalgebra(Vector3::new(50.0, 0.0, 0.0)),
+            &Vector::from_nalgebra(a),
+            0.01
+        ),
         Err(StrapdownError::SampleOutOfRange { .. })
     ));
     assert!(matches!(
-        nav.update(&g, &Vector3::new(0.0, 0.0, -2000.0), 0.01),
+        nav.update(
+            &Vector::from_nalgebra(g),
+            &Vector::from_nalgebra(Vector3::new(0.0, 0.0, -2000.0)),
+            0.01
+        ),
         Err(StrapdownError::SampleOutOfRange { .. })
     ));
     assert_eq!(nav.state(), before);
     assert_eq!(nav.rejected_count(), 9);
     assert_eq!(nav.step_count(), 0);
     // The largest interval is accepted.
-    nav.update(&g, &a, MAX_INTERVAL_S).expect("1 s is allowed");
+    nav.update(
+        &Vector::from_nalgebra(g),
+        &Vector::from_nalgebra(a),
+        MAX_INTERVAL_S,
+    )
+    .expect("1 s is allowed");
     assert_eq!(nav.step_count(), 1);
 }
 
@@ -700,7 +742,7 @@ fn refuses_bad_states() {
         ),
         (
             StrapdownState {
-                v_ned_m_s: Vector3::new(0.0, f64::INFINITY, 0.0),
+                v_ned_m_s: Vector::new(0.0, f64::INFINITY, 0.0),
                 ..ok
             },
             StrapdownError::NonFiniteState,
@@ -719,7 +761,7 @@ fn refuses_bad_states() {
     let not_unit = UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(1.1, 0.0, 0.0, 0.0));
     assert!(matches!(
         Strapdown::new(StrapdownState {
-            q_nb: not_unit,
+            q_nb: Rotation::from_nalgebra(not_unit),
             ..ok
         }),
         Err(StrapdownError::NotUnitQuaternion(_))
@@ -737,14 +779,18 @@ fn refuses_bad_states() {
     // A step that would cross the latitude limit is refused.
     let edge = StrapdownState {
         lat_rad: MAX_ABS_LATITUDE_RAD - 1e-9,
-        v_ned_m_s: Vector3::new(100.0, 0.0, 0.0),
-        q_nb: UnitQuaternion::identity(),
+        v_ned_m_s: Vector::new(100.0, 0.0, 0.0),
+        q_nb: Rotation::identity(),
         ..ok
     };
     let mut nav = Strapdown::new(edge).expect("valid");
     let g_edge = normal_gravity(edge.lat_rad, edge.height_m);
     assert!(matches!(
-        nav.update(&Vector3::zeros(), &Vector3::new(0.0, 0.0, -g_edge), 1.0),
+        nav.update(
+            &Vector::from_nalgebra(Vector3::zeros()),
+            &Vector::from_nalgebra(Vector3::new(0.0, 0.0, -g_edge)),
+            1.0
+        ),
         Err(StrapdownError::LatitudeOutOfRange(_))
     ));
     assert_eq!(nav.state(), edge);
@@ -757,19 +803,33 @@ fn longitude_wraps_across_the_antimeridian() {
     let lat: f64 = 0.2;
     let q = from_euler(0.0, 0.0, 0.5 * PI);
     let v = Vector3::new(0.0, 2.0, 0.0);
-    let start = StrapdownState::at_depth(q, v, lat, PI - 1e-7, 10.0);
+    let start = StrapdownState::at_depth(
+        Rotation::from_nalgebra(q),
+        Vector::from_nalgebra(v),
+        lat,
+        PI - 1e-7,
+        10.0,
+    );
     let mut nav = Strapdown::new(start).expect("valid");
     // Hold the velocity: feed the specific force that cancels gravity, Coriolis
     // and the transport-rate terms, and the gyro that keeps the attitude in NED.
     for _ in 0..500 {
         let s = nav.state();
         let w_ie = earth_rate_ned(s.lat_rad);
-        let w_en = transport_rate_ned(s.lat_rad, s.height_m, &s.v_ned_m_s);
+        let w_en = transport_rate_ned(s.lat_rad, s.height_m, s.v_ned_m_s.as_nalgebra());
         let g = Vector3::new(0.0, 0.0, normal_gravity(s.lat_rad, s.height_m));
-        let f_n = (2.0 * w_ie + w_en).cross(&s.v_ned_m_s) - g;
-        let gyro = s.q_nb.inverse_transform_vector(&(w_ie + w_en));
-        let accel = s.q_nb.inverse_transform_vector(&f_n);
-        nav.update(&gyro, &accel, 0.01).expect("valid");
+        let f_n = (2.0 * w_ie + w_en).cross(s.v_ned_m_s.as_nalgebra()) - g;
+        let gyro = s
+            .q_nb
+            .as_nalgebra()
+            .inverse_transform_vector(&(w_ie + w_en));
+        let accel = s.q_nb.as_nalgebra().inverse_transform_vector(&f_n);
+        nav.update(
+            &Vector::from_nalgebra(gyro),
+            &Vector::from_nalgebra(accel),
+            0.01,
+        )
+        .expect("valid");
     }
     let s = nav.state();
     assert!(s.lon_rad < 0.0 && s.lon_rad >= -PI, "{s:?}");

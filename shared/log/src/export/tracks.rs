@@ -2,9 +2,10 @@
 //! decoded into a [`Sample`] in the units of the exports (degrees, metres),
 //! decimated for the map formats; and the buoy's broadcast positions.
 
+use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::collections::{BTreeMap, HashMap};
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::UnitQuaternion;
 use nauta_estimation::attitude::{to_euler, wrap_pi};
 use nauta_messages::{
     AttitudeEstimate, BuoyRange, GpsFix, LblSolution, Message, NavSolution, PositionFix,
@@ -143,7 +144,7 @@ fn rpy_deg(q: [f64; 4]) -> [f64; 3] {
     if !(norm.is_finite() && norm > 0.0) {
         return NAN3;
     }
-    let uq = UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]));
+    let uq = UnitQuaternion::from_quaternion(Rotation::<Frd, Ned>::quaternion_from_wxyz(q));
     let (r, p, y) = to_euler(&uq);
     [r.to_degrees(), p.to_degrees(), y.to_degrees()]
 }

@@ -55,6 +55,7 @@ pub use config::{
     PropellerConfig, SuiteConfig, SuiteError, Transponder,
 };
 
+use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::f64::consts::TAU;
 
 use nalgebra::Vector3;
@@ -278,14 +279,13 @@ pub struct TruthReading {
 impl TruthReading {
     /// The wire form of a [`Truth`].
     pub fn from_truth(t: &Truth) -> Self {
-        let q = t.q_nb.quaternion();
         Self {
             stamp_ns: stamp_ns(t.t_s),
             lat_rad: t.lat_rad,
             lon_rad: t.lon_rad,
             depth_m: t.depth_m,
             vel_ned_m_s: t.v_ned_m_s.into(),
-            quat_nb: [q.w, q.i, q.j, q.k],
+            quat_nb: Rotation::<Frd, Ned>::from_nalgebra(t.q_nb).to_wxyz(),
             rate_nb_body_rad_s: t.body_rate_nb_rad_s.into(),
             current_ned_m_s: t.current_ned_m_s.into(),
             distance_m: t.distance_m,

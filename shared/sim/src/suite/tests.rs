@@ -215,11 +215,8 @@ fn ahrs_heading_is_magnetic() {
     let wrap = nauta_estimation::attitude::wrap_pi;
     for x in go(SuiteConfig::survey().noise_free()) {
         let Some(a) = x.ahrs else { continue };
-        let q = x.truth.quat_nb;
-        let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-            q[0], q[1], q[2], q[3],
-        ));
-        let (r, p, y) = nauta_estimation::attitude::to_euler(&q);
+        let q = Rotation::<Frd, Ned>::from_wxyz(x.truth.quat_nb).expect("unit truth");
+        let (r, p, y) = q.euler();
         assert!((0.0..TAU).contains(&a.heading_mag_rad));
         assert!(wrap(a.heading_mag_rad - (y - decl)).abs() < 1e-12);
         assert!((a.roll_rad - r).abs() < 1e-12 && (a.pitch_rad - p).abs() < 1e-12);
@@ -229,11 +226,8 @@ fn ahrs_heading_is_magnetic() {
     let mut errs = Vec::new();
     for x in go(SuiteConfig::survey()) {
         let Some(a) = x.ahrs else { continue };
-        let q = x.truth.quat_nb;
-        let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-            q[0], q[1], q[2], q[3],
-        ));
-        let (_, _, y) = nauta_estimation::attitude::to_euler(&q);
+        let q = Rotation::<Frd, Ned>::from_wxyz(x.truth.quat_nb).expect("unit truth");
+        let (_, _, y) = q.euler();
         errs.push(wrap(a.heading_mag_rad - (y - decl)));
     }
     let (mean, std) = crate::noise::mean_std(&errs);

@@ -5,6 +5,7 @@ use crate::mission::{
 };
 use nauta_estimation::attitude::wrap_pi;
 use nauta_estimation::earth::transverse_radius;
+use nauta_estimation::frames::Vector;
 use nauta_estimation::strapdown::Strapdown;
 
 fn env() -> Environment {
@@ -48,14 +49,18 @@ fn strapdown_follows_ten_minutes_of_survey() {
     let mut last = *s.truth();
     for _ in 0..60_000 {
         let (truth, imu) = s.step();
-        ins.update(&imu.gyro_rad_s, &imu.accel_m_s2, imu.dt_s)
-            .expect("sample accepted");
+        ins.update(
+            &Vector::from_nalgebra(imu.gyro_rad_s),
+            &Vector::from_nalgebra(imu.accel_m_s2),
+            imu.dt_s,
+        )
+        .expect("sample accepted");
         let est = ins.state();
         let (h, v) = errors(&est, &truth);
         max_h = max_h.max(h);
         max_v = max_v.max(v);
-        max_att = max_att.max(est.q_nb.angle_to(&truth.q_nb));
-        max_vel = max_vel.max((est.v_ned_m_s - truth.v_ned_m_s).norm());
+        max_att = max_att.max(est.q_nb.as_nalgebra().angle_to(&truth.q_nb));
+        max_vel = max_vel.max((est.v_ned_m_s.to_nalgebra() - truth.v_ned_m_s).norm());
         min_yaw = min_yaw.min(s.vehicle_state().yaw_rad);
         max_yaw = max_yaw.max(s.vehicle_state().yaw_rad);
         max_depth = max_depth.max(truth.depth_m);
@@ -87,12 +92,16 @@ fn strapdown_follows_the_lbl_route_in_a_current() {
     let (mut max_h, mut max_v, mut max_att) = (0.0f64, 0.0f64, 0.0f64);
     for _ in 0..30_000 {
         let (truth, imu) = s.step();
-        ins.update(&imu.gyro_rad_s, &imu.accel_m_s2, imu.dt_s)
-            .expect("sample accepted");
+        ins.update(
+            &Vector::from_nalgebra(imu.gyro_rad_s),
+            &Vector::from_nalgebra(imu.accel_m_s2),
+            imu.dt_s,
+        )
+        .expect("sample accepted");
         let (h, v) = errors(&ins.state(), &truth);
         max_h = max_h.max(h);
         max_v = max_v.max(v);
-        max_att = max_att.max(ins.state().q_nb.angle_to(&truth.q_nb));
+        max_att = max_att.max(ins.state().q_nb.as_nalgebra().angle_to(&truth.q_nb));
     }
     eprintln!(
         "lbl 5 min in current: horizontal {max_h:.3e} m, vertical {max_v:.3e} m, attitude {:.3e}°",
@@ -278,9 +287,13 @@ fn attitude_motions_are_reproduced_by_the_mechanization() {
         let mut max_pos = 0.0f64;
         while !s.finished() {
             let (t, imu) = s.step();
-            ins.update(&imu.gyro_rad_s, &imu.accel_m_s2, imu.dt_s)
-                .expect("accepted");
-            max_att = max_att.max(ins.state().q_nb.angle_to(&t.q_nb));
+            ins.update(
+                &Vector::from_nalgebra(imu.gyro_rad_s),
+                &Vector::from_nalgebra(imu.accel_m_s2),
+                imu.dt_s,
+            )
+            .expect("accepted");
+            max_att = max_att.max(ins.state().q_nb.as_nalgebra().angle_to(&t.q_nb));
             let (h, v) = errors(&ins.state(), &t);
             max_pos = max_pos.max(h.max(v));
         }
