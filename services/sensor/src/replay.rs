@@ -103,6 +103,18 @@ pub fn serve(ctx: &mut Context, path: &Path) -> anyhow::Result<()> {
         }
         out.publish_message(r)?;
         if (i as u64 + 1).is_multiple_of(crate::BATCH) {
+            // A watermark per batch, as the simulator publishes: the
+            // recording is in stamp order, so nothing earlier than the next
+            // message's stamp is still to come, and a consumer of a sparse
+            // channel does not wait for that channel's next message.
+            if let Some(next) = replay.messages.get(i + 1) {
+                let published = out.published();
+                out.progress.publish(Progress::at(
+                    next.header().stamp_ns,
+                    Role::Sensor,
+                    published,
+                ))?;
+            }
             out.flush();
             if crate::serve_control(&mut control, ctx, last_stamp)? || ctx.termination_requested() {
                 stopped = true;
