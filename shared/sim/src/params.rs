@@ -157,6 +157,11 @@ sensors.lbl.noise.multipath_probability = 0.2
             ("sensors.dvl.colour = 1", "colour"),
             ("sensors.dvl.rate_hz = -5.0", "dvl.rate_hz"),
             ("survey.legs = 0", "survey.legs"),
+            // Values that parsed and then overflowed or ate the memory.
+            ("survey.legs = 9223372036854775807", "survey.legs"),
+            ("survey.legs = 100000000", "survey.legs"),
+            ("survey.leg_length_m = 1e300", "survey.leg_length_m"),
+            ("survey.speed_m_s = 1e-300", "survey.speed_m_s"),
             ("lbl_sync_hz = 0", "lbl_sync_hz"),
             ("sensors = 3", "sensors"),
         ] {

@@ -192,6 +192,19 @@ pub enum ScenarioError {
     Suite(#[from] SuiteError),
 }
 
+/// Longest still period or attitude-motion scenario, s (a week).
+const MAX_DURATION_S: f64 = 7.0 * 86_400.0;
+/// Most survey transects (a lawnmower of 1,000 legs is already weeks long).
+const MAX_SURVEY_LEGS: usize = 1_000;
+/// Longest transect and widest spacing, m.
+const MAX_LEG_LENGTH_M: f64 = 100_000.0;
+/// Deepest set-point, m (the deepest ocean).
+const MAX_DEPTH_M: f64 = 11_000.0;
+/// Slowest speed through the water, m/s (below it a mission never ends).
+const MIN_SPEED_M_S: f64 = 0.01;
+/// Fastest speed through the water, m/s.
+const MAX_SPEED_M_S: f64 = 20.0;
+
 fn check(name: &'static str, value: f64, ok: bool) -> Result<(), ScenarioError> {
     if value.is_finite() && ok {
         Ok(())
@@ -224,19 +237,46 @@ impl ScenarioParams {
     }
 
     /// Checks the values that the builders below do not check themselves.
+    /// Every one has a sane range, so that a value that parses cannot make
+    /// the mission builder allocate without bound (`legs = 1e8` took 12.5 GB
+    /// in `nauta check`; `legs = 2^63 - 1` overflowed a capacity).
     pub fn validate(&self) -> Result<(), ScenarioError> {
-        check("still_s", self.still_s, self.still_s >= 0.0)?;
+        check(
+            "still_s",
+            self.still_s,
+            (0.0..=MAX_DURATION_S).contains(&self.still_s),
+        )?;
         check(
             "attitude_duration_s",
             self.attitude_duration_s,
-            self.attitude_duration_s > 0.0,
+            self.attitude_duration_s > 0.0 && self.attitude_duration_s <= MAX_DURATION_S,
         )?;
         let s = &self.survey;
-        check("survey.legs", s.legs as f64, s.legs > 0)?;
-        check("survey.leg_length_m", s.leg_length_m, s.leg_length_m > 0.0)?;
-        check("survey.spacing_m", s.spacing_m, s.spacing_m >= 0.0)?;
-        check("survey.depth_m", s.depth_m, s.depth_m >= 0.0)?;
-        check("survey.speed_m_s", s.speed_m_s, s.speed_m_s > 0.0)?;
+        check(
+            "survey.legs",
+            s.legs as f64,
+            (1..=MAX_SURVEY_LEGS).contains(&s.legs),
+        )?;
+        check(
+            "survey.leg_length_m",
+            s.leg_length_m,
+            s.leg_length_m > 0.0 && s.leg_length_m <= MAX_LEG_LENGTH_M,
+        )?;
+        check(
+            "survey.spacing_m",
+            s.spacing_m,
+            (0.0..=MAX_LEG_LENGTH_M).contains(&s.spacing_m),
+        )?;
+        check(
+            "survey.depth_m",
+            s.depth_m,
+            (0.0..=MAX_DEPTH_M).contains(&s.depth_m),
+        )?;
+        check(
+            "survey.speed_m_s",
+            s.speed_m_s,
+            (MIN_SPEED_M_S..=MAX_SPEED_M_S).contains(&s.speed_m_s),
+        )?;
         check("survey.heading_deg", s.heading_deg, true)?;
         check(
             "water.temperature_c",
