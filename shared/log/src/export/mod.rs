@@ -222,11 +222,9 @@ pub enum ExportError {
         /// What the recording has instead.
         detail: String,
     },
-    /// CSV was asked of a recording without track or attitude channels.
-    #[error(
-        "{path} has no track or attitude channel to export as csv: {detail}; \
-         --format foxglove takes every channel"
-    )]
+    /// CSV was asked of a recording without track or attitude channels, or
+    /// Foxglove of one without any channel.
+    #[error("{path} has nothing to export: {detail} (--format foxglove takes every channel)")]
     NothingToExport {
         /// The recording.
         path: PathBuf,
@@ -459,6 +457,14 @@ pub fn export(
                 .collect();
         }
         Format::Foxglove => {
+            // A file with no channel is not a recording worth a Foxglove
+            // file (a junk file that happens to parse as an empty MCAP).
+            if rec.channels.is_empty() {
+                return Err(ExportError::NothingToExport {
+                    path: input.to_owned(),
+                    detail: "it has no channel at all".to_owned(),
+                });
+            }
             let Some(f) = fox.take() else {
                 return Err(ExportError::Internal(
                     "the Foxglove converter is missing".to_owned(),

@@ -387,6 +387,26 @@ fn clear_errors() {
 }
 
 #[test]
+fn a_foxglove_export_of_a_file_with_no_channel_fails_and_writes_nothing() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let path = dir.path().join("empty.mcap");
+    LogWriter::create(&path, WriterOptions::default())
+        .expect("create")
+        .finish()
+        .expect("finish");
+    let out = dir.path().join("x.mcap");
+    let e = run(&path, &out, Format::Foxglove).expect_err("nothing to export");
+    assert!(matches!(e, ExportError::NothingToExport { .. }), "{e}");
+    assert!(e.to_string().contains("no channel"), "{e}");
+    assert!(!out.exists());
+    assert_eq!(
+        std::fs::read_dir(dir.path()).expect("dir").count(),
+        1,
+        "a part file left"
+    );
+}
+
+#[test]
 fn a_cut_recording_exports_what_it_holds_with_a_note() {
     let dir = tempfile::tempdir().expect("tmp");
     let input = write_run(dir.path(), true);
