@@ -1,250 +1,30 @@
-//! The estimator shell, generically: a minimal role built on it (a 1-D
-//! position tracker with a fast velocity input and a slow position input) in
-//! real iceoryx2 processes-in-threads, each test in its own namespace and
-//! under a watchdog. It shows stamp-ordered processing whatever the arrival
-//! order, hot swap with every stamp exactly once, warm restart from the
-//! snapshot within 3σ, bad input refused and counted, and a wiring cycle
-//! (tracker ↔ relay) that stays deterministic without a round trip per
-//! sample.
-//!
-//! The test role reuses nauta's message types as carriers: the tracker runs
-//! as `ains` (`ains/nav`: `depth_m` is its 1-D position, `pos_std_ned_m[2]`
-//! its σ; `ains/snapshot`), velocity arrives in `sensor/imu`'s
-//! `accel_m_s2[0]`, position measurements in `sensor/depth`'s `depth_m`, and
-//! the relay of the cycle runs as `lbl` (`lbl/nav`: `x_m`, `p[0][0]`).
+//! What a test of the shell runs: a source, role threads, a collector,
+//! the launcher's handover, and the in-process references.
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
+use nauta_estimation::Estimator;
 use nauta_estimation::readings::{Depth, Imu, LblNav, Nav};
-use nauta_estimation::{Estimator, EstimatorError, Stamped};
 use nauta_messages::*;
 use nauta_runtime::context::ContextSettings;
 use nauta_runtime::{Connect, Context, ControlClient, Namespace, Shell, services};
 
-/// Position at t seconds, m.
-fn truth_x(t: f64) -> f64 {
-    20.0 + 5.0 * (0.2 * t).sin()
-}
-
-const IMU_DT_NS: u64 = 10_000_000; // 100 Hz
-const DEPTH_EVERY: u64 = 20; // 5 Hz
-const SIGMA_V: f64 = 0.05;
-const SIGMA_X: f64 = 0.2;
-
-/// splitmix64, for seeded Gaussian noise without a dependency.
-struct Noise(u64);
-impl Noise {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (u1, u2) = (self.uniform().max(1e-300), self.uniform());
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
-}
-
-// ---- the minimal role ----------------------------------------------------
-
-#[derive(Debug, Clone, Copy)]
-enum TrackIn {
-    Velocity(Imu),
-    Position(Depth),
-    Relayed(LblNav),
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct TrackOut {
-    stamp_ns: u64,
-    x: f64,
-    std: f64,
-}
-impl Stamped for TrackOut {
-    fn stamp_ns(&self) -> u64 {
-        self.stamp_ns
-    }
-}
-
-/// A 1-D Kalman filter: velocity integrated at 100 Hz, position fixes at 5 Hz.
-#[derive(Debug, Clone)]
-struct Tracker {
-    x: f64,
-    p: f64,
-    skip_until: Option<u64>,
-}
-
-impl Tracker {
-    /// Starts at 0 with a σ of 10 m (the truth is near 20 m): a cold start
-    /// shows in the published σ for seconds.
-    fn cold() -> Self {
-        Tracker {
-            x: 0.0,
-            p: 100.0,
-            skip_until: None,
-        }
-    }
-    fn update(&mut self, z: f64, r: f64) -> Result<(), EstimatorError> {
-        if !(-100.0..=100.0).contains(&z) {
-            return Err(EstimatorError::new("implausible-position", z));
-        }
-        let k = self.p / (self.p + r);
-        self.x += k * (z - self.x);
-        self.p *= 1.0 - k;
-        Ok(())
-    }
-}
-
-impl Estimator for Tracker {
-    type Input = TrackIn;
-    type Output = TrackOut;
-    type Snapshot = (f64, f64);
-
-    fn on_input(&mut self, i: &TrackIn, out: &mut Vec<TrackOut>) -> Result<(), EstimatorError> {
-        let stamp = match i {
-            TrackIn::Velocity(m) => m.stamp_ns,
-            TrackIn::Position(d) => d.stamp_ns,
-            TrackIn::Relayed(l) => l.stamp_ns,
-        };
-        if self.skip_until.is_some_and(|s| stamp <= s) {
-            return Ok(());
-        }
-        match i {
-            TrackIn::Velocity(m) => {
-                self.x += m.accel_m_s2[0] * m.interval_s;
-                self.p += (SIGMA_V * m.interval_s).powi(2);
-                out.push(TrackOut {
-                    stamp_ns: stamp,
-                    x: self.x,
-                    std: self.p.sqrt(),
-                });
-            }
-            TrackIn::Position(d) => self.update(d.depth_m, SIGMA_X * SIGMA_X)?,
-            TrackIn::Relayed(l) => self.update(l.x_m, l.p[0][0])?,
-        }
-        Ok(())
-    }
-
-    fn snapshot(&self) -> Option<(f64, f64)> {
-        Some((self.x, self.p))
-    }
-
-    fn restore(&mut self, s: &(f64, f64), stamp_ns: u64) -> Result<(), EstimatorError> {
-        (self.x, self.p) = *s;
-        self.skip_until = Some(stamp_ns);
-        Ok(())
-    }
-}
-
-fn nav_of(o: &TrackOut) -> Option<NavSolution> {
-    Some(NavSolution {
-        header: Header::new(o.stamp_ns, 0, Role::Ains, 0),
-        depth_m: o.x,
-        pos_std_ned_m: [0.0, 0.0, o.std],
-        ..Default::default()
-    })
-}
-fn snapshot_of(s: &(f64, f64), stamp_ns: u64) -> AinsSnapshot {
-    let mut m = AinsSnapshot {
-        header: Header::new(stamp_ns, 0, Role::Ains, 0),
-        depth_m: s.0,
-        ..Default::default()
-    };
-    m.covariance[2][2] = s.1;
-    m
-}
-fn state_of(m: &AinsSnapshot) -> (f64, f64) {
-    (m.depth_m, m.covariance[2][2])
-}
-
-/// The tracker aided by the sensor's position channel.
-fn tracker_shell() -> Shell<Tracker> {
-    Shell::<Tracker>::new(Role::Ains, &["kf"])
-        .input(services::imu(), Role::Sensor, TrackIn::Velocity)
-        .aiding(services::depth(), Role::Sensor, TrackIn::Position)
-        .output(services::nav_solution(), nav_of)
-        .snapshot(services::snapshot(Role::Ains), snapshot_of, state_of)
-}
-
-// ---- the relay of the cycle ------------------------------------------------
-
-#[derive(Debug, Clone, Copy)]
-enum RelayIn {
-    Position(Depth),
-    Tracked(Nav),
-}
-
-/// Blends each position measurement with the tracker's latest estimate and
-/// hands it back: its output depends on the tracker's, and the tracker's on
-/// it.
-#[derive(Debug, Clone, Default)]
-struct Relay {
-    tracked: Option<(f64, f64)>,
-}
-
-impl Estimator for Relay {
-    type Input = RelayIn;
-    type Output = TrackOut;
-    type Snapshot = ();
-
-    fn on_input(&mut self, i: &RelayIn, out: &mut Vec<TrackOut>) -> Result<(), EstimatorError> {
-        match i {
-            RelayIn::Tracked(n) => self.tracked = Some((n.depth_m, n.pos_std_ned_m[2])),
-            RelayIn::Position(d) => {
-                let r = SIGMA_X * SIGMA_X;
-                let (x, var) = match self.tracked {
-                    Some((xt, st)) => {
-                        let w = st * st / (st * st + r);
-                        (xt + w * (d.depth_m - xt), r * (1.0 + w))
-                    }
-                    None => (d.depth_m, r),
-                };
-                out.push(TrackOut {
-                    stamp_ns: d.stamp_ns,
-                    x,
-                    std: var.sqrt(),
-                });
-            }
-        }
-        Ok(())
-    }
-    fn snapshot(&self) -> Option<()> {
-        None
-    }
-    fn restore(&mut self, _: &(), _: u64) -> Result<(), EstimatorError> {
-        Ok(())
-    }
-}
-
-fn lbl_of(o: &TrackOut) -> Option<LblSolution> {
-    let mut m = LblSolution {
-        header: Header::new(o.stamp_ns, 0, Role::Lbl, 0),
-        x_m: o.x,
-        ..Default::default()
-    };
-    m.p[0][0] = o.std * o.std;
-    Some(m)
-}
+use super::roles::*;
 
 // ---- the pieces of a run -----------------------------------------------------
 
 /// One source message, in publication order.
 #[derive(Debug, Clone, Copy)]
-enum Out {
+pub enum Out {
     Imu(ImuSample),
     Depth(DepthSample),
 }
 
 /// The source's samples: 100 Hz velocity, 5 Hz position, seeded noise.
-fn samples(seconds: u64, seed: u64) -> Vec<Out> {
+pub fn samples(seconds: u64, seed: u64) -> Vec<Out> {
     let mut noise = Noise(seed);
     let mut v = Vec::new();
     for k in 1..=seconds * 100 {
@@ -269,7 +49,7 @@ fn samples(seconds: u64, seed: u64) -> Vec<Out> {
     v
 }
 
-fn stamp_of(o: &Out) -> u64 {
+pub fn stamp_of(o: &Out) -> u64 {
     match o {
         Out::Imu(m) => m.header.stamp_ns,
         Out::Depth(m) => m.header.stamp_ns,
@@ -277,9 +57,9 @@ fn stamp_of(o: &Out) -> u64 {
 }
 
 /// A thread that panics the test process if the test outlives `bound`.
-struct Watchdog(Arc<AtomicBool>);
+pub struct Watchdog(Arc<AtomicBool>);
 impl Watchdog {
-    fn new(name: &'static str, bound: Duration) -> Self {
+    pub fn new(name: &'static str, bound: Duration) -> Self {
         let done = Arc::new(AtomicBool::new(false));
         let d = done.clone();
         std::thread::spawn(move || {
@@ -301,7 +81,7 @@ impl Drop for Watchdog {
     }
 }
 
-fn settings(role: Role, process: &str, instance: u32) -> ContextSettings {
+pub fn settings(role: Role, process: &str, instance: u32) -> ContextSettings {
     ContextSettings {
         process: process.into(),
         instance,
@@ -312,7 +92,7 @@ fn settings(role: Role, process: &str, instance: u32) -> ContextSettings {
 
 /// How the source interleaves its two channels.
 #[derive(Debug, Clone, Copy)]
-enum Arrival {
+pub enum Arrival {
     /// In stamp order, a watermark and a flush every 32 messages.
     InOrder,
     /// Each batch publishes every position sample before the velocity
@@ -323,7 +103,7 @@ enum Arrival {
 /// The source: waits until `ready` processes reported ready, then publishes
 /// `data` as `arrival` says, a watermark after each batch, the end of stream
 /// last. `pause_at`: stops before that stamp until `resume` says go.
-fn source(
+pub fn source(
     ns: Namespace,
     data: Vec<Out>,
     arrival: Arrival,
@@ -402,7 +182,7 @@ fn source(
 
 /// Runs `shell` with a fresh `core` as `process` instance `instance`;
 /// `prepare` sets the context's standby, snapshot and resume-after.
-fn role<E>(
+pub fn role<E>(
     ns: &Namespace,
     shell: fn() -> Shell<E>,
     core: E,
@@ -430,12 +210,12 @@ where
 /// Collects `ains/nav` until the end of stream of instance `final_instance`
 /// on `ains/progress`; also the
 /// latest snapshot and the last health of the tracker.
-struct Collected {
-    nav: Vec<NavSolution>,
-    health: Option<Health>,
+pub struct Collected {
+    pub nav: Vec<NavSolution>,
+    pub health: Option<Health>,
 }
 
-fn collector(
+pub fn collector(
     ns: &Namespace,
     final_instance: u32,
     attached: &Arc<AtomicUsize>,
@@ -497,7 +277,7 @@ fn collector(
 
 /// The same estimator in-process, on the inputs in (stamp, declared input)
 /// order: what every run through the shell must reproduce.
-fn reference(data: &[Out]) -> Vec<TrackOut> {
+pub fn reference(data: &[Out]) -> Vec<TrackOut> {
     let mut merged: Vec<(u64, usize, TrackIn)> = data
         .iter()
         .filter_map(|o| match o {
@@ -519,14 +299,14 @@ fn reference(data: &[Out]) -> Vec<TrackOut> {
 }
 
 /// Equal output sequences, or the first difference.
-fn assert_same(a: &[TrackOut], b: &[TrackOut], what: &str) {
+pub fn assert_same(a: &[TrackOut], b: &[TrackOut], what: &str) {
     if let Some(k) = (0..a.len().min(b.len())).find(|&k| a[k] != b[k]) {
         panic!("{what}: output {k} differs: {:?} against {:?}", a[k], b[k]);
     }
     assert_eq!(a.len(), b.len(), "{what}: output counts");
 }
 
-fn outputs(nav: &[NavSolution]) -> Vec<TrackOut> {
+pub fn outputs(nav: &[NavSolution]) -> Vec<TrackOut> {
     nav.iter()
         .map(|m| TrackOut {
             stamp_ns: m.header.stamp_ns,
@@ -536,14 +316,14 @@ fn outputs(nav: &[NavSolution]) -> Vec<TrackOut> {
         .collect()
 }
 
-fn join<T>(h: std::thread::JoinHandle<anyhow::Result<T>>, what: &str) -> T {
+pub fn join<T>(h: std::thread::JoinHandle<anyhow::Result<T>>, what: &str) -> T {
     h.join()
         .unwrap_or_else(|_| panic!("{what} panicked"))
         .unwrap_or_else(|e| panic!("{what}: {e:#}"))
 }
 
 /// One run of the tracker over `data` arriving as `arrival`.
-fn run_tracker(data: Vec<Out>, arrival: Arrival) -> Collected {
+pub fn run_tracker(data: Vec<Out>, arrival: Arrival) -> Collected {
     let ns = Namespace::unique();
     let (col, col_ready) = collector(&ns, 0, &Arc::default());
     col_ready.recv().expect("collector started");
@@ -568,81 +348,14 @@ fn run_tracker(data: Vec<Out>, arrival: Arrival) -> Collected {
     join(col, "collector")
 }
 
-#[test]
-fn inputs_are_processed_in_stamp_order_whatever_the_arrival_order() {
-    let _wd = Watchdog::new("stamp order", Duration::from_secs(120));
-    let data = samples(30, 1);
-    let expected = reference(&data);
-    for arrival in [Arrival::InOrder, Arrival::SlowFirst(5)] {
-        let got = run_tracker(data.clone(), arrival);
-        assert_same(
-            &outputs(&got.nav),
-            &expected,
-            &format!("{arrival:?}: outputs differ from the in-process estimator"),
-        );
-        let h = got.health.expect("health");
-        assert_eq!((h.rejected, h.dropped), (0, 0), "{arrival:?}");
-    }
-}
-
-#[test]
-fn bad_input_is_refused_and_counted() {
-    let _wd = Watchdog::new("bad input", Duration::from_secs(120));
-    let good = samples(10, 2);
-    let mut bad = good.clone();
-    // A NaN, an interval out of range, a repeated stamp, a stamp that goes
-    // back, and a position the estimator itself refuses.
-    let at = |k: usize| stamp_of(&good[k]);
-    let nan = ImuSample {
-        header: Header::new(at(100) + 1, 0, Role::Sensor, 0),
-        accel_m_s2: [f64::NAN, 0.0, 0.0],
-        interval_s: 0.01,
-        ..Default::default()
-    };
-    bad.insert(101, Out::Imu(nan));
-    let mut long = nan;
-    long.header.stamp_ns = at(300) + 1;
-    long.accel_m_s2[0] = 1.0;
-    long.interval_s = 5.0;
-    bad.insert(302, Out::Imu(long));
-    let Out::Imu(mut repeated) = good[500] else {
-        panic!("an IMU sample")
-    };
-    repeated.accel_m_s2[0] += 1.0;
-    bad.insert(505, Out::Imu(repeated));
-    let Out::Imu(mut back) = good[600] else {
-        panic!("an IMU sample")
-    };
-    back.header.stamp_ns -= 5 * IMU_DT_NS;
-    bad.insert(606, Out::Imu(back));
-    let depth_at = bad
-        .iter()
-        .position(|o| matches!(o, Out::Depth(_)))
-        .expect("a position sample");
-    let Out::Depth(mut wild) = bad[depth_at] else {
-        unreachable!()
-    };
-    wild.header.stamp_ns += 1;
-    wild.depth_m = 5000.0;
-    bad.insert(depth_at + 1, Out::Depth(wild));
-    let got = run_tracker(bad, Arrival::InOrder);
-    let h = got.health.expect("health");
-    assert_eq!(h.rejected, 5, "every bad message counted once");
-    assert_same(
-        &outputs(&got.nav),
-        &reference(&good),
-        "bad input changed something",
-    );
-}
-
 /// Snapshot message of the role's latest state, as the launcher keeps it.
-fn latest_snapshot(sub: &mut nauta_runtime::Subscriber<AinsSnapshot>) -> Option<AinsSnapshot> {
+pub fn latest_snapshot(sub: &mut nauta_runtime::Subscriber<AinsSnapshot>) -> Option<AinsSnapshot> {
     let mut last = None;
     sub.drain(|s| last = Some(s)).expect("snapshots");
     last
 }
 
-fn snapshot_file(s: &AinsSnapshot) -> std::path::PathBuf {
+pub fn snapshot_file(s: &AinsSnapshot) -> std::path::PathBuf {
     let path = std::env::temp_dir().join(format!(
         "nauta-shell-test-{}-{}.snapshot",
         std::process::id(),
@@ -655,7 +368,7 @@ fn snapshot_file(s: &AinsSnapshot) -> std::path::PathBuf {
 /// What the launcher does for a swap or a restart: pause the source at
 /// `at_ns`, take the latest snapshot, start instance 1 from it (in standby
 /// for a swap), hand over, resume the source.
-fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
+pub fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
     let ns = Namespace::unique();
     let data = samples(30, 3);
     let expected = reference(&data);
@@ -777,11 +490,11 @@ fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
     (join(col, "collector"), boundary, expected)
 }
 
-const SNAPSHOT_NS: u64 = 1_000_000_000;
+pub const SNAPSHOT_NS: u64 = 1_000_000_000;
 
 /// Waits until the collector has received with `n` publishers present
 /// (attached to each: iceoryx2 attaches on receive).
-fn wait_attached(attached: &AtomicUsize, n: usize) {
+pub fn wait_attached(attached: &AtomicUsize, n: usize) {
     let t0 = Instant::now();
     while attached.load(Ordering::SeqCst) < n {
         assert!(
@@ -792,9 +505,9 @@ fn wait_attached(attached: &AtomicUsize, n: usize) {
     }
 }
 /// The σ a cold tracker starts with, m.
-const COLD_STD_M: f64 = 10.0;
+pub const COLD_STD_M: f64 = 10.0;
 
-fn assert_every_stamp_once(nav: &[NavSolution], what: &str) {
+pub fn assert_every_stamp_once(nav: &[NavSolution], what: &str) {
     let mut count: BTreeMap<u64, u32> = BTreeMap::new();
     for m in nav {
         *count.entry(m.header.stamp_ns).or_default() += 1;
@@ -815,77 +528,13 @@ fn assert_every_stamp_once(nav: &[NavSolution], what: &str) {
     assert_eq!(count.len(), expected.len(), "{what}: unexpected stamps");
 }
 
-#[test]
-fn hot_swap_publishes_every_stamp_exactly_once() {
-    let _wd = Watchdog::new("hot swap", Duration::from_secs(180));
-    let (got, boundary, expected) = run_handover(true, 12 * SNAPSHOT_NS + 345 * 1_000_000);
-    assert_every_stamp_once(&got.nav, "swap");
-    // Up to the boundary the outputs are instance 0's, bit for bit.
-    let out = outputs(&got.nav);
-    let before: Vec<_> = out
-        .iter()
-        .filter(|o| o.stamp_ns <= boundary)
-        .copied()
-        .collect();
-    assert_eq!(before, expected[..before.len()].to_vec());
-    // The successor continued the estimate (not a cold start).
-    let after: Vec<_> = out.iter().filter(|o| o.stamp_ns > boundary).collect();
-    let first = after.first().expect("outputs after the swap");
-    let t = first.stamp_ns as f64 * 1e-9;
-    assert!(
-        (first.x - truth_x(t)).abs() <= 3.0 * first.std && first.std < COLD_STD_M / 10.0,
-        "first output after the swap {first:?}: truth {}",
-        truth_x(t)
-    );
-}
-
-#[test]
-fn a_warm_restart_continues_from_the_snapshot_within_3_sigma() {
-    let _wd = Watchdog::new("warm restart", Duration::from_secs(180));
-    let (got, _, _) = run_handover(false, 17 * SNAPSHOT_NS + 505 * 1_000_000);
-    assert_every_stamp_once(&got.nav, "restart");
-    let restarted: Vec<_> = got
-        .nav
-        .iter()
-        .filter(|m| m.header.instance == 1)
-        .take(100)
-        .collect();
-    assert_eq!(restarted.len(), 100, "instance 1 published");
-    for m in restarted {
-        let t = m.header.stamp_ns as f64 * 1e-9;
-        let (x, std) = (m.depth_m, m.pos_std_ned_m[2]);
-        assert!(
-            (x - truth_x(t)).abs() <= 3.0 * std && std < COLD_STD_M / 10.0,
-            "at {t} s: {x} ± {std} against the truth {} (a cold start begins at 0 ± {COLD_STD_M})",
-            truth_x(t)
-        );
-    }
-}
-
-// ---- the cycle ------------------------------------------------------------
-
-/// The tracker aided by the relay, which is aided by the tracker.
-fn cyclic_tracker_shell() -> Shell<Tracker> {
-    Shell::<Tracker>::new(Role::Ains, &["kf"])
-        .input(services::imu(), Role::Sensor, TrackIn::Velocity)
-        .aiding(services::lbl_solution(), Role::Lbl, TrackIn::Relayed)
-        .output(services::nav_solution(), nav_of)
-}
-
-fn relay_shell() -> Shell<Relay> {
-    Shell::<Relay>::new(Role::Lbl, &["relay"])
-        .input(services::depth(), Role::Sensor, RelayIn::Position)
-        .aiding(services::nav_solution(), Role::Ains, RelayIn::Tracked)
-        .output(services::lbl_solution(), lbl_of)
-}
-
 /// Both estimators in one thread, in the order the two merges define. At
 /// each stamp t: the tracker's velocity input (its output nav(t)); the
 /// relay's position input of t, if any (it sorts before nav(t), the relay's
 /// second input; its output fix(t)); the relay's nav(t); the tracker's
 /// fix(t) (after its velocity input of t, its first input, and before the
 /// next one).
-fn cycle_reference(data: &[Out]) -> Vec<TrackOut> {
+pub fn cycle_reference(data: &[Out]) -> Vec<TrackOut> {
     let (mut tracker, mut relay) = (Tracker::cold(), Relay::default());
     let (mut nav, mut fix) = (Vec::new(), Vec::new());
     let mut k = 0;
@@ -921,84 +570,4 @@ fn cycle_reference(data: &[Out]) -> Vec<TrackOut> {
         k += 1;
     }
     nav
-}
-
-#[test]
-fn a_wiring_cycle_runs_deterministically_without_a_round_trip_per_sample() {
-    let _wd = Watchdog::new("cycle", Duration::from_secs(180));
-    let data = samples(40, 4);
-    let mut digests = Vec::new();
-    for arrival in [Arrival::InOrder, Arrival::SlowFirst(9)] {
-        let ns = Namespace::unique();
-        let (col, col_ready) = collector(&ns, 0, &Arc::default());
-        col_ready.recv().expect("collector started");
-        let relay_progress = {
-            let ctx = Context::new(&ns, settings(Role::Test, "counter", 0)).expect("node");
-            let (sub, inbox) = ctx.subscriber(&services::progress(Role::Lbl)).expect("tap");
-            (ctx, sub, inbox)
-        };
-        let src = source(
-            ns.clone(),
-            data.clone(),
-            arrival,
-            vec!["tracker", "relay", "collector"],
-            None,
-        );
-        let trk = role(
-            &ns,
-            cyclic_tracker_shell,
-            Tracker::cold(),
-            Role::Ains,
-            "tracker",
-            0,
-            |_| {},
-        );
-        let rel = role(
-            &ns,
-            relay_shell,
-            Relay::default(),
-            Role::Lbl,
-            "relay",
-            0,
-            |_| {},
-        );
-        join(src, "source");
-        join(trk, "tracker");
-        join(rel, "relay");
-        let got = join(col, "collector");
-        let (ctx, mut sub, inbox) = relay_progress;
-        let mut watermarks = 0;
-        sub.drain(|_| watermarks += 1).expect("relay watermarks");
-        drop((sub, inbox));
-        ctx.finish();
-        let out = outputs(&got.nav);
-        let h = got.health.expect("tracker health");
-        assert_eq!(
-            (h.rejected, h.dropped),
-            (0, 0),
-            "{arrival:?}: tracker refused or lost input"
-        );
-        assert_eq!(
-            out.len(),
-            4000,
-            "{arrival:?}: one output per velocity sample"
-        );
-        // Far fewer watermarks from the relay than samples: the tracker did
-        // not wait on it sample by sample.
-        assert!(
-            watermarks < 4000 / 4,
-            "{arrival:?}: {watermarks} relay watermarks"
-        );
-        digests.push(out);
-    }
-    assert_same(
-        &digests[0],
-        &digests[1],
-        "the cycle's outputs depend on timing",
-    );
-    assert_same(
-        &digests[0],
-        &cycle_reference(&data),
-        "the cycle's outputs differ from the in-process order",
-    );
 }
