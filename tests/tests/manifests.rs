@@ -10,25 +10,13 @@ use nauta_tests::*;
 
 const BOUND: Duration = Duration::from_secs(180);
 
-const GOOD: &str = r#"[run]
-clock = "sim"
-duration_s = 5
-seed = 3
-
-[site]
-latitude_deg = 38.6
-longitude_deg = -9.3
-magnetic_declination_deg = -0.98
-
-[process.sensor]
-bin = "nauta-sensor"
-params = { scenario = "survey" }
-
-[process.attitude]
-bin = "nauta-attitude"
-variant = "gyro"
-variants.gyro = { alignment_samples = 100 }
-"#;
+/// The test library's small manifest with a short alignment.
+static GOOD: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    format!(
+        "{}variants.gyro = {{ alignment_samples = 100 }}\n",
+        nauta_tests::SMALL_MANIFEST
+    )
+});
 
 /// A describe of `nauta-fake` that subscribes to `sensor/imu` as the wrong type.
 const WRONG_TYPE: &str = r#"{"role":"attitude","inputs":[{"service":"sensor/imu","type":"nauta.DvlSample.v1"}],"outputs":[],"variants":["fake"]}"#;
@@ -63,7 +51,7 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "duplicate process",
-            text: format!("{GOOD}\n[process.attitude]\nbin = \"nauta-attitude\"\n"),
+            text: format!("{}\n[process.attitude]\nbin = \"nauta-attitude\"\n", *GOOD),
             expect: &["line 20", "duplicate", "attitude"],
         },
         Case {
@@ -84,7 +72,7 @@ fn cases() -> Vec<Case> {
         },
         Case {
             name: "type mismatch",
-            text: format!("{GOOD}\n[process.fake]\nbin = \"nauta-fake\"\n"),
+            text: format!("{}\n[process.fake]\nbin = \"nauta-fake\"\n", *GOOD),
             expect: &[
                 ":21:",
                 "process.fake.bin",
@@ -176,7 +164,7 @@ fn ten_malformed_manifests_each_give_one_error_and_start_nothing() {
     let ns = Namespace::unique();
     let dir = std::env::temp_dir().join(format!("nauta-test-{}", ns.as_str()));
     std::fs::create_dir_all(&dir).expect("dir");
-    let good = write(&dir, 99, GOOD);
+    let good = write(&dir, 99, &GOOD);
     let (code, out, err) = nauta(&["check", &good.display().to_string()]);
     assert_eq!(code, Some(0), "the good manifest fails: {out}{err}");
     let cases = cases();
