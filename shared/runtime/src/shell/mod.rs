@@ -288,7 +288,9 @@ where
             }
             if let Some(boundary) = asked.activated_after {
                 for o in outs.iter_mut() {
-                    if let Some(s) = o.release(boundary)? {
+                    let (n, last) = o.release(boundary)?;
+                    health.outputs += n;
+                    if let Some(s) = last {
                         run.last_published = Some(run.last_published.map_or(s, |l| l.max(s)));
                     }
                 }

@@ -33,9 +33,9 @@ pub(super) trait OutputPort<O> {
     /// Publishes the message made from `o`, or keeps it when `hold`;
     /// returns the stamp published.
     fn offer(&mut self, o: &O, stamp_ns: u64, hold: bool) -> anyhow::Result<Option<u64>>;
-    /// Publishes what was held with a stamp after `boundary_ns`; returns the
-    /// last stamp published.
-    fn release(&mut self, boundary_ns: u64) -> anyhow::Result<Option<u64>>;
+    /// Publishes what was held with a stamp after `boundary_ns`; returns how
+    /// many and the last stamp published.
+    fn release(&mut self, boundary_ns: u64) -> anyhow::Result<(u64, Option<u64>)>;
     fn flush(&mut self);
     fn published(&self) -> u64;
     fn given_up(&self) -> u64;
@@ -67,17 +67,18 @@ impl<M: Message, O> OutputPort<O> for TypedOutput<M, O> {
         Ok(Some(stamp_ns))
     }
 
-    fn release(&mut self, boundary_ns: u64) -> anyhow::Result<Option<u64>> {
-        let mut last = None;
+    fn release(&mut self, boundary_ns: u64) -> anyhow::Result<(u64, Option<u64>)> {
+        let (mut n, mut last) = (0, None);
         for m in self.held.drain(..) {
             let s = m.header().stamp_ns;
             if s > boundary_ns {
                 self.publisher.publish(m)?;
+                n += 1;
                 last = Some(s);
             }
         }
         self.publisher.flush();
-        Ok(last)
+        Ok((n, last))
     }
 
     fn flush(&mut self) {
