@@ -40,7 +40,7 @@ fn main() {
         let Some((&which, bytes)) = data.split_first() else {
             return;
         };
-        match which % 10 {
+        match which % 13 {
             0 => checked::<ImuSample, Imu>(bytes),
             1 => checked::<DepthSample, Depth>(bytes),
             2 => checked::<DvlSample, Dvl>(bytes),
@@ -50,7 +50,10 @@ fn main() {
             6 => checked::<BuoyRange, BuoyRangeReading>(bytes),
             7 => checked::<LblReply, LblReplyReading>(bytes),
             8 => checked::<TruthState, Truth>(bytes),
-            _ => checked::<AttitudeEstimate, Attitude>(bytes),
+            9 => checked::<AttitudeEstimate, Attitude>(bytes),
+            10 => checked::<NavSolution, Nav>(bytes),
+            11 => checked::<PositionFix, Fix>(bytes),
+            _ => checked::<LblSolution, LblNav>(bytes),
         }
         registry::visit_all(&mut DecodeAll(bytes));
         for service in SensorMessage::SERVICES {

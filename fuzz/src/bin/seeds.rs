@@ -13,7 +13,7 @@ use std::path::Path;
 use nauta_messages::*;
 
 /// The selector byte of each type in the `messages` target.
-const TYPES: [&str; 10] = [
+const TYPES: [&str; 13] = [
     ImuSample::TYPE_NAME,
     DepthSample::TYPE_NAME,
     DvlSample::TYPE_NAME,
@@ -24,6 +24,9 @@ const TYPES: [&str; 10] = [
     LblReply::TYPE_NAME,
     TruthState::TYPE_NAME,
     AttitudeEstimate::TYPE_NAME,
+    NavSolution::TYPE_NAME,
+    PositionFix::TYPE_NAME,
+    LblSolution::TYPE_NAME,
 ];
 
 fn main() -> anyhow::Result<()> {
