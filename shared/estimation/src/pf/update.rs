@@ -1,0 +1,314 @@
+//! The filter's update with one aiding pair (P2)-(P6): the likelihood of
+//! each particle, tempering when the weights would collapse, the rest-time
+//! bias update, and selection-and-replacement resampling.
+
+use super::*;
+
+/// What one aiding pair says (P3): the factors' precisions `1/(2 s²)` (0:
+/// factor left out) and their references.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Aid {
+    k_t: f64,
+    q_acc: [f64; 4],
+    k_h: f64,
+    q_mag: [f64; 4],
+}
+
+/// The log-likelihood of each particle (P3) into `out`.
+pub(super) fn log_likelihoods(particles: &[Particle], aid: &Aid, out: &mut Vec<f64>) {
+    out.clear();
+    out.extend(particles.iter().map(|p| {
+        let (w, x, y, z) = (p.q[0], p.q[1], p.q[2], p.q[3]);
+        let mut ll = 0.0;
+        if aid.k_t > 0.0 {
+            // x and y of q_acc ⊗ q_i⁻¹.
+            let a = &aid.q_acc;
+            let dx = -a[0] * x + a[1] * w - a[2] * z + a[3] * y;
+            let dy = -a[0] * y + a[1] * z + a[2] * w - a[3] * x;
+            ll -= aid.k_t * (dx * dx + dy * dy);
+        }
+        if aid.k_h > 0.0 {
+            // z of q_mag ⊗ q_i⁻¹.
+            let m = &aid.q_mag;
+            let dz = -m[0] * z - m[1] * y + m[2] * x + m[3] * w;
+            ll -= aid.k_h * dz * dz;
+        }
+        ll
+    }));
+}
+
+/// N_eff (eq. 46) of the weights `∝ exp(lw_i + alpha · delta_i)`.
+pub(super) fn ess_with(particles: &[Particle], delta: &[f64], alpha: f64) -> f64 {
+    let max = particles
+        .iter()
+        .zip(delta)
+        .map(|(p, d)| p.lw + alpha * d)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if !max.is_finite() {
+        return 0.0;
+    }
+    let (mut sum, mut sum_sq) = (0.0, 0.0);
+    for (p, d) in particles.iter().zip(delta) {
+        let w = (p.lw + alpha * d - max).exp();
+        sum += w;
+        sum_sq += w * w;
+    }
+    sum * sum / sum_sq
+}
+
+impl ParticleFilter {
+    /// Updates (P2)-(P6) with one specific force (m/s², FRD) and one
+    /// calibrated field (µT, FRD); returns what each sensor did.
+    pub fn update_aiding(
+        &mut self,
+        accel_m_s2: &Vector3<f64>,
+        mag_ut: &Vector3<f64>,
+    ) -> (AidingUse, AidingUse) {
+        let dt = self.last_gyro.map_or(0.01, |(_, dt)| dt);
+        let accel_ok = finite3(accel_m_s2) && accel_m_s2.norm() > 0.0;
+        let rest = accel_ok && self.update_rest(accel_m_s2);
+
+        // (P2)/(P4), tilt.
+        let g = self.gravity_m_s2;
+        let mut tilt = AidingUse::Invalid;
+        let mut k_t = 0.0;
+        let mut q_acc = [0.0; 4];
+        if accel_ok {
+            // The specific force in the navigation frame, with the estimate
+            // half a gyro interval back (an interval average), low-passed
+            // there (P2'): accelerations that come and go average out.
+            let half_back = match self.last_gyro {
+                Some((w, dt)) => quat_from_rotation_vector(&((self.bias_hat - w) * (0.5 * dt))),
+                None => UnitQuaternion::identity(),
+            };
+            let f_n = (self.q_hat * half_back) * accel_m_s2;
+            // At rest there is nothing to average: the low-pass restarts
+            // from the current sample, without its lag.
+            let tau = self.config.accel_lowpass_s;
+            self.accel_lp = match self.accel_lp {
+                Some(lp) if tau > 0.0 && !rest => Some(lp + (f_n - lp) * (dt / (tau + dt))),
+                _ => Some(f_n),
+            };
+            let lp = self.accel_lp.unwrap_or(f_n);
+            let norm = lp.norm();
+            let deviation = norm - g;
+            if !(deviation.abs() <= self.config.accel_gate_m_s2 && norm > 0.0) {
+                tilt = AidingUse::Gated;
+            } else {
+                let v = lp / norm;
+                let r = Vector3::new(0.0, 0.0, -1.0);
+                let axis = v.cross(&r);
+                let s = axis.norm();
+                let theta = if s > 0.0 {
+                    axis * (s.atan2(v.dot(&r)) / s)
+                } else {
+                    Vector3::zeros()
+                };
+                let var = self.config.accel_noise_m_s2_rt_hz.powi(2) / (dt * g * g)
+                    + self.config.tilt_noise_rad_rt_s.powi(2) / dt
+                    + (deviation / g).powi(2);
+                let s_t = (0.5 * var.sqrt()).sin();
+                k_t = 0.5 / (s_t * s_t);
+                q_acc = to_array(&(quat_from_rotation_vector(&theta) * self.q_hat));
+                tilt = AidingUse::Used;
+            }
+        }
+
+        // (P2)/(P4), heading.
+        let mut heading = AidingUse::Invalid;
+        let mut k_h = 0.0;
+        let mut q_mag = [0.0; 4];
+        let m_norm = mag_ut.norm();
+        let repeated = self.last_mag == Some(*mag_ut);
+        self.last_mag = Some(*mag_ut);
+        if repeated {
+            heading = AidingUse::Repeated;
+        } else if finite3(mag_ut) && m_norm > 0.0 {
+            let ratio = m_norm / self.magnetic.field_ut();
+            let m_n = self.q_hat * mag_ut;
+            let horizontal = m_n.x.hypot(m_n.y);
+            let dip = m_n.z.atan2(horizontal);
+            let dip_diff = dip - self.magnetic.dip_rad();
+            if !(horizontal > 0.0) {
+                heading = AidingUse::Invalid;
+            } else if !((ratio - 1.0).abs() <= self.config.mag_norm_gate
+                && dip_diff.abs() <= self.config.mag_dip_gate_rad)
+            {
+                heading = AidingUse::Gated;
+            } else {
+                let psi = wrap_pi(self.declination_rad - m_n.y.atan2(m_n.x));
+                let var = self.config.heading_noise_rad_rt_s.powi(2) / dt
+                    + (self.config.mag_noise_ut
+                        / (self.magnetic.field_ut() * self.magnetic.dip_rad().cos()))
+                    .powi(2)
+                    + (ratio - 1.0).powi(2)
+                    + dip_diff * dip_diff;
+                let s_h = (0.5 * var.sqrt()).sin();
+                k_h = 0.5 / (s_h * s_h);
+                q_mag = to_array(&(quat_from_rotation_vector(&(Vector3::z() * psi)) * self.q_hat));
+                heading = AidingUse::Used;
+            }
+        }
+
+        // (P5): the gyro as a bias measurement at rest.
+        if let (true, Some((w, _))) = (rest, self.last_gyro) {
+            let earth_b = self.q_hat.inverse_transform_vector(&self.omega_ie_n);
+            self.rest_bias_update(&(w - earth_b));
+            self.stats.rest_samples += 1;
+        }
+
+        match tilt {
+            AidingUse::Used => self.stats.tilt_used += 1,
+            AidingUse::Gated => self.stats.tilt_gated += 1,
+            AidingUse::Invalid | AidingUse::Repeated => self.stats.tilt_invalid += 1,
+        }
+        match heading {
+            AidingUse::Used => self.stats.heading_used += 1,
+            AidingUse::Gated => self.stats.heading_gated += 1,
+            AidingUse::Invalid => self.stats.heading_invalid += 1,
+            AidingUse::Repeated => self.stats.heading_repeated += 1,
+        }
+        if k_t == 0.0 && k_h == 0.0 {
+            return (tilt, heading);
+        }
+
+        // (P3), with progressive correction (P7).
+        let prior = self.q_hat;
+        let aid = Aid {
+            k_t,
+            q_acc,
+            k_h,
+            q_mag,
+        };
+        let n = self.particles.len() as f64;
+        let n_th = self.config.resample_threshold * n;
+        let mut delta = std::mem::take(&mut self.delta);
+        let mut remaining = 1.0;
+        for stage in 0..=MAX_TEMPER_STAGES {
+            log_likelihoods(&self.particles, &aid, &mut delta);
+            let sum_sq = self.apply_log_likelihoods(&delta, remaining);
+            if stage == MAX_TEMPER_STAGES || n_th < 1.0 || 1.0 / sum_sq >= n_th {
+                // (P6): eq. 46 and resampling.
+                if 1.0 / sum_sq < n_th {
+                    self.resample();
+                }
+                break;
+            }
+            // (P7): too few effective particles for the whole likelihood.
+            // Undo it, apply the largest fraction that keeps N_eff at N_th
+            // (bisection; N_eff falls as the fraction grows), resample, go on.
+            for (p, d) in self.particles.iter_mut().zip(&delta) {
+                p.lw -= remaining * d;
+            }
+            let (mut lo, mut hi) = (0.0, remaining);
+            for _ in 0..BISECTION_STEPS {
+                let mid = 0.5 * (lo + hi);
+                if ess_with(&self.particles, &delta, mid) >= n_th {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let alpha = lo.max(remaining / f64::from(1u32 << BISECTION_STEPS));
+            self.apply_log_likelihoods(&delta, alpha);
+            remaining -= alpha;
+            self.stats.tempering_stages += 1;
+            self.resample();
+        }
+        self.delta = delta;
+        // The low-passed specific force follows the correction (P2').
+        if let Some(lp) = self.accel_lp {
+            self.accel_lp = Some((self.q_hat * prior.inverse()) * lp);
+        }
+        (tilt, heading)
+    }
+
+    /// (P5): the Kalman update of the biases with the measurement `z` (rad/s)
+    /// of variance σ_r² per axis, applied to the cloud as a shift and a
+    /// contraction (per axis: `K = P/(P + σ_r²)`, mean `b̂ + K (z − b̂)`,
+    /// deviations scaled by `√(1 − K)`). The measurement is linear and
+    /// Gaussian in the bias alone, so this is the exact update of a Gaussian
+    /// cloud; unlike a reweighting it cannot run out of particles near `z`.
+    pub(super) fn rest_bias_update(&mut self, z: &Vector3<f64>) {
+        let r = self.rest.gyro_var.max(REST_VARIANCE_FLOOR);
+        let mut var = [0.0; 3];
+        for (p, &w) in self.particles.iter().zip(&self.weights) {
+            for (k, v) in var.iter_mut().enumerate() {
+                let d = p.b[k] - self.bias_hat[k];
+                *v += w * d * d;
+            }
+        }
+        let mut shift = [0.0; 3];
+        let mut scale = [1.0; 3];
+        for (k, (sh, sc)) in shift.iter_mut().zip(scale.iter_mut()).enumerate() {
+            let gain = var[k] / (var[k] + r);
+            *sh = gain * (z[k] - self.bias_hat[k]);
+            *sc = (1.0 - gain).sqrt();
+        }
+        if !(shift.iter().chain(&scale).all(|v| v.is_finite())) {
+            return;
+        }
+        let b_hat = self.bias_hat;
+        for p in self.particles.iter_mut() {
+            for (k, b) in p.b.iter_mut().enumerate() {
+                *b = b_hat[k] + shift[k] + scale[k] * (*b - b_hat[k]);
+            }
+        }
+        self.bias_hat += Vector3::from(shift);
+    }
+
+    /// Adds `alpha` times the log-likelihoods to the log weights, normalises
+    /// the weights and takes the estimate in the same pass; returns `Σ w_i²`.
+    pub(super) fn apply_log_likelihoods(&mut self, delta: &[f64], alpha: f64) -> f64 {
+        let mut max_lw = f64::NEG_INFINITY;
+        for (p, d) in self.particles.iter_mut().zip(delta) {
+            p.lw += alpha * d;
+            max_lw = max_lw.max(p.lw);
+        }
+        if !max_lw.is_finite() {
+            // Cannot happen with finite inputs; keep the previous weights.
+            for (p, w) in self.particles.iter_mut().zip(&self.weights) {
+                p.lw = w.ln();
+            }
+            return self.weights.iter().map(|w| w * w).sum();
+        }
+        let mut m = Moments::new(&self.q_hat);
+        let mut sum_sq = 0.0;
+        for (p, w) in self.particles.iter_mut().zip(self.weights.iter_mut()) {
+            p.lw -= max_lw;
+            *w = p.lw.exp();
+            sum_sq += *w * *w;
+            m.add(p, *w);
+        }
+        let sum = m.w;
+        for w in self.weights.iter_mut() {
+            *w /= sum;
+        }
+        self.finish_moments(&m);
+        sum_sq / (sum * sum)
+    }
+
+    /// (P6): residual resampling, then the shrinkage kernel; equal weights.
+    pub(super) fn resample(&mut self) {
+        let cov = self.covariance();
+        let l = resample::cholesky_floor(&cov);
+        resample::residual(
+            &self.particles,
+            &self.weights,
+            &mut self.scratch,
+            &mut self.rng,
+        );
+        std::mem::swap(&mut self.particles, &mut self.scratch);
+        resample::regularise(
+            &mut self.particles,
+            &self.q_hat,
+            &self.bias_hat,
+            &l,
+            &mut self.rng,
+        );
+        let n = self.particles.len() as f64;
+        self.weights.iter_mut().for_each(|w| *w = 1.0 / n);
+        self.refresh_estimate();
+        self.stats.resamples += 1;
+    }
+}
