@@ -1,0 +1,253 @@
+//! Tests of the manifest: schema, values, overrides and where errors point.
+
+use super::*;
+
+const GOOD: &str = r#"
+[run]
+clock = "sim"
+duration_s = 60
+seed = 7
+
+[site]
+latitude_deg = 38.7
+longitude_deg = -9.1
+
+[process.attitude]
+bin = "nauta-attitude"
+variant = "gyro"
+variants.gyro = { gain = 1.5 }
+params = { publish = true }
+"#;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct P {
+    gain: f64,
+    publish: bool,
+}
+
+#[test]
+fn parses_and_merges_params() {
+    let m = Manifest::parse(Path::new("m.toml"), GOOD).expect("parses");
+    assert_eq!(m.run.seed, 7);
+    let p: P = m.params("attitude", None).expect("params");
+    assert!((p.gain - 1.5).abs() < 1e-12);
+    assert!(p.publish);
+}
+
+#[test]
+fn unknown_key_names_file_line_and_key() {
+    let bad = GOOD.replace("seed = 7", "seed = 7\nsped = 3");
+    let e = Manifest::parse(Path::new("m.toml"), &bad)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("m.toml") && e.contains("sped") && e.contains("line 6"),
+        "{e}"
+    );
+}
+
+#[test]
+fn bad_values_are_refused_with_place() {
+    let bad = GOOD.replace("duration_s = 60", "duration_s = -1");
+    let e = Manifest::parse(Path::new("m.toml"), &bad)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("m.toml:4") && e.contains("run.duration_s"),
+        "{e}"
+    );
+    let bad = GOOD.replace("gain = 1.5", "gain = nan");
+    let e = Manifest::parse(Path::new("m.toml"), &bad)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("variants.gyro.gain"), "{e}");
+    let bad = GOOD.replace("variant = \"gyro\"", "variant = \"pf\"");
+    let e = Manifest::parse(Path::new("m.toml"), &bad)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unknown variant"), "{e}");
+}
+
+#[test]
+fn names_launcher_flags_and_empty_manifests_are_refused() {
+    let parse = |text: &str| {
+        Manifest::parse(Path::new("m.toml"), text)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    let at = |n: usize| {
+        GOOD.replace(
+            "[process.attitude]",
+            &format!("[process.{}]", "a".repeat(n)),
+        )
+    };
+    parse(&at(MAX_PROCESS_NAME)).expect("32 bytes");
+    let e = parse(&at(MAX_PROCESS_NAME + 1)).expect_err("33 bytes");
+    assert!(e.contains("1-32 bytes"), "{e}");
+    let e = parse(&GOOD.replace("[process.attitude]", "[process.\"a/b\"]")).expect_err("a slash");
+    assert!(e.contains("only A-Z"), "{e}");
+    for arg in LAUNCHER_FLAGS {
+        for given in [arg.to_owned(), format!("{arg}=1")] {
+            let text = GOOD.replace(
+                "variant = \"gyro\"",
+                &format!("variant = \"gyro\"\nargs = [\"{given}\"]"),
+            );
+            let e = parse(&text).expect_err(&given);
+            assert!(
+                e.contains("process.attitude.args") && e.contains(arg),
+                "{given}: {e}"
+            );
+        }
+    }
+    let text = GOOD.replace(
+        "variant = \"gyro\"",
+        "variant = \"gyro\"\nargs = [\"--namespaces\"]",
+    );
+    parse(&text).expect("not a launcher flag");
+    let run_only = GOOD.split("[site]").next().unwrap_or(GOOD);
+    let e = parse(run_only).expect_err("no process");
+    assert!(e.contains("no process"), "{e}");
+}
+
+#[test]
+fn errors_keep_their_place_with_overrides() {
+    let dir = std::env::temp_dir().join(format!("nauta-manifest-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let file = dir.join("m.toml");
+    let load = |text: &str, overrides: &[&str]| {
+        std::fs::write(&file, text).expect("write");
+        let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        Manifest::load_with(&file, &o)
+            .map(|_| ())
+            .expect_err("refused")
+            .to_string()
+    };
+    let fast = ["run.clock=\"sim\""];
+    // A key of the file: its line, with overrides too.
+    let e = load(&GOOD.replace("seed = 7", "seed = 7\nsped = 3"), &fast);
+    assert!(e.contains("line 6") && e.contains("sped"), "{e}");
+    let e = load(&GOOD.replace("seed = 7", "seed = -1"), &fast);
+    assert!(e.contains("line 5") && e.contains("-1"), "{e}");
+    // A key an override brings: the override.
+    let e = load(GOOD, &["run.seed=-1"]);
+    assert!(e.contains("on the command line (run.seed=-1)"), "{e}");
+    let e = load(GOOD, &["attitude.colour=1"]);
+    assert!(
+        e.contains("attitude.colour=1") && e.contains("colour"),
+        "{e}"
+    );
+    // A value an override set out of range: the override, not a line.
+    let e = load(GOOD, &["run.rate=0.0"]);
+    assert!(
+        e.starts_with(&format!(
+            "{}: run.rate (set on the command line: run.rate)",
+            file.display()
+        )),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn parameter_errors_name_their_line_and_key() {
+    let text = GOOD.replace("gain = 1.5", "gain = 1.5, colour = 1");
+    let m = Manifest::parse(Path::new("m.toml"), &text).expect("parses");
+    let e = m
+        .params::<P>("attitude", None)
+        .expect_err("unknown field")
+        .to_string();
+    assert!(
+        e.starts_with("m.toml:14: process.attitude.variants.gyro.colour: unknown field"),
+        "{e}"
+    );
+    let text = GOOD.replace("publish = true", "publish = 3");
+    let m = Manifest::parse(Path::new("m.toml"), &text).expect("parses");
+    let e = m
+        .params::<P>("attitude", None)
+        .expect_err("wrong type")
+        .to_string();
+    assert!(
+        e.starts_with("m.toml:15: process.attitude.params.publish: invalid type"),
+        "{e}"
+    );
+}
+
+#[test]
+fn restart_policies_are_checked() {
+    let with = |restart: &str| {
+        let text = format!("{GOOD}restart = {restart}\n");
+        Manifest::parse(Path::new("m.toml"), &text).map_err(|e| e.to_string())
+    };
+    with(r#"{ policy = "on-failure", max = 5, window_s = 60, backoff_ms = [20, 1000] }"#)
+        .expect("valid");
+    for (restart, key) in [
+        (r#"{ policy = "sometimes" }"#, "restart.policy"),
+        (r#"{ policy = "always", max = 0 }"#, "restart.max"),
+        (
+            r#"{ policy = "always", window_s = -1.0 }"#,
+            "restart.window_s",
+        ),
+        (
+            r#"{ policy = "always", backoff_ms = [500, 20] }"#,
+            "restart.backoff_ms",
+        ),
+        (r#"{ policy = "always", tries = 3 }"#, "tries"),
+    ] {
+        let e = with(restart).expect_err(restart);
+        assert!(e.contains("m.toml") && e.contains(key), "{restart}: {e}");
+    }
+}
+
+#[test]
+fn after_orders_the_start_and_refuses_cycles() {
+    let three = |a: &str, b: &str, c: &str| {
+        format!(
+            "[run]\nduration_s = 1\n[process.a]\nbin = \"x\"\nafter = {a}\n\
+             [process.b]\nbin = \"x\"\nafter = {b}\n[process.c]\nbin = \"x\"\nafter = {c}\n"
+        )
+    };
+    let m =
+        Manifest::parse(Path::new("m.toml"), &three("[\"c\"]", "[]", "[\"b\"]")).expect("valid");
+    assert_eq!(m.start_order(|_| 0), ["b", "c", "a"]);
+    // Rank decides among the free ones; `after` still wins.
+    assert_eq!(m.start_order(|n| u8::from(n != "a")), ["b", "c", "a"]);
+    let e = Manifest::parse(Path::new("m.toml"), &three("[\"c\"]", "[\"a\"]", "[\"b\"]"))
+        .expect_err("cycle")
+        .to_string();
+    assert!(
+        e.contains("cycle in `after`") && e.contains("m.toml:5"),
+        "{e}"
+    );
+    assert!(e.contains("a -> c -> b -> a"), "{e}");
+    let e = Manifest::parse(Path::new("m.toml"), &three("[\"a\"]", "[]", "[]"))
+        .expect_err("self")
+        .to_string();
+    assert!(e.contains("a -> a"), "{e}");
+}
+
+#[test]
+fn effective_manifest_names_the_users_file() {
+    let m = Manifest::parse(Path::new("launch/survey.toml"), GOOD).expect("parses");
+    let effective = m.to_toml().expect("serialises");
+    let bad = effective.replace("gain = 1.5", "gain = \"high\"");
+    let m2 = Manifest::parse(Path::new("/tmp/nauta/x/manifest.toml"), &effective).expect("parses");
+    assert_eq!(m2.path, Path::new("launch/survey.toml"));
+    let m3 = Manifest::parse(Path::new("/tmp/nauta/x/manifest.toml"), &bad).expect("parses");
+    let e = m3.params::<P>("attitude", None).unwrap_err().to_string();
+    assert!(e.starts_with("launch/survey.toml"), "{e}");
+}
+
+#[test]
+fn overrides() {
+    let mut t: toml::Table = toml::from_str(GOOD).expect("toml");
+    apply_override(&mut t, "run.duration_s=5").expect("run");
+    apply_override(&mut t, "attitude.variants.gyro.gain=2").expect("proc");
+    apply_override(&mut t, "run.clock=wall").expect("string");
+    assert!(apply_override(&mut t, "nobody.x=1").is_err());
+    let m = Manifest::from_table(Path::new("m.toml"), t, String::new(), &[]).expect("valid");
+    assert!((m.run.duration_s - 5.0).abs() < 1e-12);
+    assert_eq!(m.run.clock, "wall");
+    let p: P = m.params("attitude", None).expect("params");
+    assert!((p.gain - 2.0).abs() < 1e-12);
+}
