@@ -8,6 +8,8 @@
 //!
 //! - [`earth`]: WGS84 constants, radii of curvature, gravity, Earth and transport
 //!   rates, geodetic ↔ ECEF.
+//! - [`ains`]: the aided INS role's inputs and the aiding-mode bits of its
+//!   output (`ains/nav`).
 //! - [`attitude`]: quaternion and Euler conventions, rotation vectors, the exact
 //!   attitude update and its sensor-side inverse, attitude error metrics.
 //! - [`attitude_core`]: the attitude role's estimator (alignment, then the
@@ -36,6 +38,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod ains;
 pub mod alignment;
 pub mod attitude;
 pub mod attitude_core;

@@ -66,7 +66,8 @@ message! {
         pub vel_std_ned_m_s: [f64; 3],
         /// Predicted accumulated horizontal position error (paper 002), m.
         pub predicted_drift_m: f64,
-        /// Aiding mode bits (0 free inertial, 1 DVL, 2 GPS, 4 buoy).
+        /// Aiding mode bits (0 free inertial, 1 DVL, 2 GPS, 4 buoy/acoustic fix,
+        /// 8 heading, 16 depth; `nauta_estimation::ains::aiding`).
         pub aiding_mode: u32,
         /// Zero.
         pub pad: u32,
