@@ -3,8 +3,9 @@
 //! against the surface GPS fixes (DESIGN §9; the README's "Evaluating a
 //! recording" lists every JSON key).
 //!
-//! - [`data`]: the recording read into checked, sorted samples;
-//! - [`run_info`]: the mission frame (origin, transponders) from metadata;
+//! - [`data`]: the recording read through `nauta_log`'s checked values and
+//!   run metadata ([`nauta_log::streams`], [`nauta_log::run`]) into sorted
+//!   samples;
 //! - [`compute`]: matching, per-sample errors and the metrics;
 //! - [`live`]: the same evaluation of a running pipeline (`nauta launch`'s summary).
 //!
@@ -14,7 +15,6 @@
 pub mod compute;
 pub mod data;
 pub mod live;
-pub mod run_info;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -3,15 +3,12 @@
 //! are [`nauta_log::export`]'s; this is the command line around it: options,
 //! a progress bar, notes on stderr and a summary on stdout.
 
-use std::collections::BTreeMap;
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use nauta_log::export::{
-    self, ExportOptions, Format, GeoOrigin, KmlAltitude, Transponder, UtcTime,
-};
+use nauta_log::export::{self, ExportOptions, Format, GeoOrigin, KmlAltitude, UtcTime};
 
 /// Export formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -98,39 +95,6 @@ fn parse_origin(text: &str) -> anyhow::Result<GeoOrigin> {
         .map_err(|e| anyhow::anyhow!("--origin {text:?}: {e}"))
 }
 
-/// The LBL transponders of a simulated run: the recorded sensor section
-/// (`sensor_config.<process>` in `nauta.run`, TOML with `params` and the
-/// chosen variant's table) read as the sensor reads it: the scenario's preset
-/// (`lbl_layout`) with the `sensors` table laid over it.
-fn transponders_from_run(meta: &BTreeMap<String, String>) -> Vec<Transponder> {
-    meta.iter()
-        .filter(|(k, _)| k.starts_with("sensor_config."))
-        .find_map(|(_, v)| sensor_transponders(v))
-        .unwrap_or_default()
-}
-
-fn sensor_transponders(text: &str) -> Option<Vec<Transponder>> {
-    let config = nauta_sim::params::SensorParams::from_recorded_section(text, "sensor_config")
-        .ok()?
-        .sensors;
-    if !config.lbl.enabled {
-        return None;
-    }
-    Some(
-        config
-            .lbl
-            .transponders
-            .iter()
-            .map(|t| Transponder {
-                id: t.id,
-                north_m: t.north_m,
-                east_m: t.east_m,
-                depth_m: t.depth_m,
-            })
-            .collect(),
-    )
-}
-
 /// Runs `nauta export`.
 pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
     let format = match args.format {
@@ -154,7 +118,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         .as_deref()
         .map(|t| UtcTime::parse(t).map_err(|e| anyhow::anyhow!("--utc-start: {e}")))
         .transpose()?;
-    options.transponders_from_run = Some(transponders_from_run);
+    options.presets = Some(crate::presets::simulated);
 
     remove_part_file_on_signal(&args.output)?;
     let total = std::fs::metadata(&args.file).map(|m| m.len()).unwrap_or(0);
@@ -272,22 +236,5 @@ mod tests {
         for bad in ["38.6", "a,b", "91,0", "1,2,3"] {
             assert!(parse_origin(bad).is_err(), "{bad}");
         }
-    }
-
-    #[test]
-    fn lbl_layouts_give_their_transponders() {
-        let mut meta = BTreeMap::new();
-        meta.insert(
-            "sensor_config.sensor".to_owned(),
-            "[params]\nscenario = \"lbl\"\nlbl_layout = \"Four\"\nlbl_sync_hz = 10.0\n".to_owned(),
-        );
-        let t = transponders_from_run(&meta);
-        assert_eq!(t.len(), 4);
-        assert_eq!((t[1].id, t[1].north_m, t[1].east_m), (2, 550.0, -150.0));
-        meta.insert(
-            "sensor_config.sensor".to_owned(),
-            "[params]\nscenario = \"survey\"\n".to_owned(),
-        );
-        assert!(transponders_from_run(&meta).is_empty());
     }
 }

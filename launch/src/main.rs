@@ -14,6 +14,7 @@ mod launch;
 mod logcmd;
 mod monitor;
 mod pipeline;
+mod presets;
 mod report;
 mod rundir;
 mod summary;

@@ -29,6 +29,9 @@ const BOUND: Duration = Duration::from_secs(300);
 /// Simulated seconds in the test recording.
 const DURATION_S: f64 = 60.0;
 
+/// The `ains/nav` message (by count) with a non-finite depth.
+const REJECTED_NAV: u64 = 4321;
+
 /// Offset of the synthetic `ains/nav` from the truth, north and east, m.
 const NAV_OFFSET_M: (f64, f64) = (5.0, 2.0);
 
@@ -169,6 +172,7 @@ fn write_recording(path: &Path) -> Value {
     }
     let mut n = 0u64;
     let mut last_fix = 0u64;
+    let mut rejected_stamp = None;
     while let Some(m) = generator.step() {
         let m = m.expect("step");
         let t = &m.truth;
@@ -190,6 +194,9 @@ fn write_recording(path: &Path) -> Value {
             }
         }
         let (north, east) = origin.to_local(t.lat_rad, t.lon_rad);
+        if n == REJECTED_NAV {
+            rejected_stamp = Some(s);
+        }
         // Synthetic estimates: the truth with a known error.
         let (nlat, nlon) = origin.to_geodetic(north + NAV_OFFSET_M.0, east + NAV_OFFSET_M.1);
         put(
@@ -199,9 +206,15 @@ fn write_recording(path: &Path) -> Value {
                 header: h(Role::Ains, n),
                 lat_rad: nlat,
                 lon_rad: nlon,
-                // One non-finite depth: left out of that JSON message, an
-                // empty CSV cell, a point at the surface on the maps.
-                depth_m: if n == 4321 { f64::NAN } else { t.depth_m },
+                // One non-finite depth: the message fails its check (DESIGN
+                // §4), so it is a CSV row of its stamp with no values and no
+                // map point; the Foxglove copy of the channel (every field as
+                // recorded) leaves the depth out of that JSON message.
+                depth_m: if n == REJECTED_NAV {
+                    f64::NAN
+                } else {
+                    t.depth_m
+                },
                 vel_ned_m_s: t.vel_ned_m_s,
                 quat_nb: t.quat_nb,
                 pos_std_ned_m: [1.5, 1.5, 0.2],
@@ -343,6 +356,7 @@ fn write_recording(path: &Path) -> Value {
             .collect::<serde_json::Map<_, _>>(),
         "known_point": {"topic": "sim/truth", "lat_deg": lat.to_degrees(), "lon_deg": lon.to_degrees()},
         "nav_offset_m": [NAV_OFFSET_M.0, NAV_OFFSET_M.1],
+        "rejected_rows": [{"topic": "ains/nav", "stamp_ns": rejected_stamp.expect("rejected nav").to_string()}],
         "buoy_points": counts["sensor/modem"],
         "transponders": transponders,
     })
@@ -575,6 +589,7 @@ fn lbl_without_an_origin_is_left_out_with_a_note() {
                 header: Header::new(i * 100_000_000, i, Role::Sensor, 0),
                 lat_rad: lat,
                 lon_rad: lon,
+                quat_nb: [1.0, 0.0, 0.0, 0.0],
                 ..Default::default()
             },
         )
@@ -622,4 +637,56 @@ fn lbl_without_an_origin_is_left_out_with_a_note() {
         (a.0 - b.0).abs() < 1e-7 && (a.1 - b.1).abs() < 1e-7,
         "{a:?} {b:?}"
     );
+}
+
+/// Issue 11: eval and export place `lbl/nav` (local metres) on the globe
+/// through the one run-metadata reader and the one projection. The fixture's
+/// `lbl/nav` is the truth's own local position, so the export must put each
+/// point on the truth's latitude and longitude (to 1e-9°, 0.1 mm) and eval
+/// must find no horizontal error (below 1 mm).
+#[test]
+fn eval_and_export_place_an_lbl_point_at_the_same_latitude_and_longitude() {
+    let wd = Watchdog::new("lbl_placement", BOUND);
+    let f = fixture();
+    let dir = scratch("lbl_placement");
+    let out = dir.join("survey.csv");
+    export(&wd, &f.recording, "csv", &out, &[]);
+    let text = std::fs::read_to_string(&out).expect("csv");
+    let mut truth: BTreeMap<String, (f64, f64)> = BTreeMap::new();
+    let mut lbl: Vec<(String, f64, f64)> = Vec::new();
+    for line in text.lines().skip(1) {
+        let cols: Vec<&str> = line.split(',').collect();
+        let (stamp, topic) = (cols[1].to_owned(), cols[2]);
+        let lat: f64 = cols[3].parse().unwrap_or(f64::NAN);
+        let lon: f64 = cols[4].parse().unwrap_or(f64::NAN);
+        match topic {
+            "sim/truth" => {
+                truth.insert(stamp, (lat, lon));
+            }
+            "lbl/nav" => lbl.push((stamp, lat, lon)),
+            _ => {}
+        }
+    }
+    assert!(lbl.len() > 100, "{} lbl/nav rows", lbl.len());
+    for (stamp, lat, lon) in &lbl {
+        let (tlat, tlon) = truth[stamp];
+        assert!(
+            (lat - tlat).abs() < 1e-9 && (lon - tlon).abs() < 1e-9,
+            "lbl/nav at {stamp}: export {lat},{lon}, truth {tlat},{tlon}"
+        );
+    }
+    let (code, stdout, stderr) = nauta(
+        &wd,
+        &[
+            OsStr::new("eval"),
+            f.recording.as_os_str(),
+            OsStr::new("--json"),
+        ],
+    );
+    assert_eq!(code, Some(0), "{stderr}");
+    let eval: Value = serde_json::from_str(&stdout).expect("eval json");
+    let rms = eval["streams"]["lbl/nav"]["horizontal_rms_m"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("no lbl/nav error: {stdout}"));
+    assert!(rms < 1e-3, "eval places lbl/nav {rms} m from the truth");
 }

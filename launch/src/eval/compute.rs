@@ -13,8 +13,8 @@ use nalgebra::{Matrix2, UnitQuaternion, Vector2, Vector3};
 use nauta_estimation::AttitudeError;
 use nauta_estimation::attitude::{rotation_vector, wrap_pi};
 use nauta_estimation::earth::{meridian_radius, transverse_radius};
+use nauta_log::run::GeoOrigin;
 use nauta_messages::checked::Gps;
-use nauta_sim::mission::Origin;
 use serde::Serialize;
 
 use super::data::{Data, EstimateSample, Horizontal, Stream, TruthSample};
@@ -129,7 +129,7 @@ pub struct Metrics {
 
 /// The frame a `lbl/nav`-like (local) stream is compared in.
 #[derive(Debug, Clone, Copy)]
-pub struct LocalFrame(pub Origin);
+pub struct LocalFrame(pub GeoOrigin);
 
 // ---------------------------------------------------------------------------
 // Geometry
@@ -531,7 +531,7 @@ pub fn local_frame(data: &Data) -> Result<LocalFrame, String> {
     // The simulator's missions start at rest at their origin (shared/sim
     // mission.rs): a truth that starts with no distance travelled is there.
     match data.truth.first() {
-        Some(t) if t.distance_m == 0.0 => Ok(LocalFrame(Origin {
+        Some(t) if t.distance_m == 0.0 => Ok(LocalFrame(GeoOrigin {
             lat_rad: t.lat_rad,
             lon_rad: t.lon_rad,
         })),

@@ -6,20 +6,11 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use anyhow::Context as _;
 use nalgebra::{Matrix2, UnitQuaternion, Vector3};
-use nauta_estimation::frames::Ned;
-use nauta_messages::checked::{
-    self, BuoyRangeReading, Gps, LblReplyReading, Truth, limits, quaternion, scalar, vector,
-};
-use nauta_messages::{
-    AttitudeEstimate, BuoyRange, GpsFix, LblReply, LblSolution, Message, NavSolution, PositionFix,
-    TruthState, codec,
-};
-
-use super::run_info::{self, RunInfo};
-
-const PI: f64 = std::f64::consts::PI;
+use nauta_log::checked::{self as logged, Checked, Rejection, Value};
+use nauta_log::run::RunInfo;
+use nauta_messages::checked::{Attitude, Fix, Gps, LblNav, Nav, Truth};
+use nauta_messages::{AttitudeEstimate, LblSolution, Message, NavSolution, PositionFix};
 
 /// The kind of an estimate stream: which message type it carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -187,24 +178,35 @@ pub struct Data {
 }
 
 impl Data {
-    /// Reads `path`; `on_progress(bytes read, file bytes)`.
+    /// Reads `path` through `nauta_log`'s checked values and run metadata;
+    /// `on_progress(bytes read, file bytes)`.
     pub fn read(path: &Path, on_progress: impl FnMut(u64, u64)) -> anyhow::Result<Self> {
         let mut d = Data {
             first_stamp_ns: u64::MAX,
             ..Default::default()
         };
-        let rec = nauta_log::reader::read_with_progress(path, on_progress, |ch, m| {
-            d.first_stamp_ns = d.first_stamp_ns.min(m.publish_time_ns);
-            d.take(&ch.topic, &ch.type_name, m.data);
-            Ok(())
-        })
-        .with_context(|| format!("cannot read the recording {}", path.display()))?;
+        let rec = nauta_log::streams::visit(
+            path,
+            on_progress,
+            |_| true,
+            |m| {
+                d.first_stamp_ns = d.first_stamp_ns.min(m.recorded.publish_time_ns);
+                if let Some(checked) = m.checked {
+                    d.take_checked(&m.channel.topic, &m.channel.type_name, checked);
+                }
+                Ok(())
+            },
+        )?;
         if d.first_stamp_ns == u64::MAX {
             d.first_stamp_ns = 0;
         }
         d.truncated = rec.recovery.truncated;
         d.damage = rec.recovery.damage_notes();
-        d.run = run_info::from_metadata(rec.metadata(nauta_log::META_RUN));
+        d.run = RunInfo::read(
+            rec.metadata(nauta_log::META_RUN),
+            &Default::default(),
+            Some(crate::presets::simulated),
+        );
         d.truth.sort_by_key(|t| t.stamp_ns);
         d.truth.dedup_by_key(|t| t.stamp_ns);
         d.gps.sort_by_key(|g| g.stamp_ns);
@@ -216,8 +218,16 @@ impl Data {
         Ok(d)
     }
 
-    /// Takes one message; what fails to decode or check is counted.
+    /// Takes one message's bytes (a live tap); what fails to decode or
+    /// check is counted.
     pub fn take(&mut self, topic: &str, type_name: &str, data: &[u8]) {
+        if let Some(checked) = logged::decode(type_name, data) {
+            self.take_checked(topic, type_name, &checked);
+        }
+    }
+
+    /// Takes one checked message of a channel of `type_name`.
+    fn take_checked(&mut self, topic: &str, type_name: &str, checked: &Result<Checked, Rejection>) {
         if let Some(kind) = StreamKind::of(type_name) {
             let stream = self
                 .streams
@@ -228,48 +238,36 @@ impl Data {
                     samples: Vec::new(),
                     rejected: 0,
                 });
-            match estimate(kind, data) {
+            match checked.as_ref().ok().and_then(|c| estimate(&c.value)) {
                 Some(s) => stream.samples.push(s),
                 None => stream.rejected += 1,
             }
             return;
         }
-        let ok = match (topic, type_name) {
-            (nauta_messages::TRUTH_SERVICE, TruthState::TYPE_NAME) => {
-                truth(data).map(|t| self.truth.push(t)).is_some()
-            }
-            (nauta_messages::GPS_SERVICE, GpsFix::TYPE_NAME) => match decode::<GpsFix, Gps>(data) {
-                Some(g) => {
-                    if g.quality > 0 {
-                        self.gps.push(g);
-                    }
-                    true
+        let value = match checked {
+            Ok(c) => &c.value,
+            Err(_) => {
+                if is_reference(topic, type_name) {
+                    *self.rejected.entry(topic.to_owned()).or_default() += 1;
                 }
-                None => false,
-            },
-            (_, LblReply::TYPE_NAME) => decode::<LblReply, LblReplyReading>(data)
-                .map(|r| {
-                    self.lbl_replies.push(LblRange {
-                        stamp_ns: r.stamp_ns,
-                        interrogation_ns: r.interrogation_stamp_ns,
-                        transponder_id: r.transponder_id,
-                        round_trip_s: r.round_trip_s,
-                    })
-                })
-                .is_some(),
-            (_, BuoyRange::TYPE_NAME) => decode::<BuoyRange, BuoyRangeReading>(data)
-                .map(|b| {
-                    self.buoy.push(BuoyFix {
-                        stamp_ns: b.stamp_ns,
-                        lat_rad: b.buoy_lat_rad,
-                        lon_rad: b.buoy_lon_rad,
-                    })
-                })
-                .is_some(),
-            _ => true,
+                return;
+            }
         };
-        if !ok {
-            *self.rejected.entry(topic.to_owned()).or_default() += 1;
+        match (topic, value) {
+            (nauta_messages::TRUTH_SERVICE, Value::Truth(t)) => self.truth.push(truth(t)),
+            (nauta_messages::GPS_SERVICE, Value::Gps(g)) if g.quality > 0 => self.gps.push(*g),
+            (_, Value::LblReply(r)) => self.lbl_replies.push(LblRange {
+                stamp_ns: r.stamp_ns,
+                interrogation_ns: r.interrogation_stamp_ns,
+                transponder_id: r.transponder_id,
+                round_trip_s: r.round_trip_s,
+            }),
+            (_, Value::Buoy(b)) => self.buoy.push(BuoyFix {
+                stamp_ns: b.stamp_ns,
+                lat_rad: b.buoy_lat_rad,
+                lon_rad: b.buoy_lon_rad,
+            }),
+            _ => {}
         }
     }
 
@@ -279,40 +277,37 @@ impl Data {
     }
 }
 
-fn decode<M, C>(data: &[u8]) -> Option<C>
-where
-    M: Message,
-    C: for<'a> TryFrom<&'a M>,
-{
-    let m: M = codec::decode(data).ok()?;
-    C::try_from(&m).ok()
+/// The reference channels whose rejections eval reports.
+fn is_reference(topic: &str, type_name: &str) -> bool {
+    use nauta_messages::{BuoyRange, GpsFix, LblReply, TruthState};
+    matches!(
+        (topic, type_name),
+        (nauta_messages::TRUTH_SERVICE, TruthState::TYPE_NAME)
+            | (nauta_messages::GPS_SERVICE, GpsFix::TYPE_NAME)
+            | (_, LblReply::TYPE_NAME)
+            | (_, BuoyRange::TYPE_NAME)
+    )
 }
 
-fn truth(data: &[u8]) -> Option<TruthSample> {
-    let m: TruthState = codec::decode(data).ok()?;
-    let t = Truth::try_from(&m).ok()?;
-    Some(TruthSample {
+fn truth(t: &Truth) -> TruthSample {
+    TruthSample {
         stamp_ns: t.stamp_ns,
         lat_rad: t.lat_rad,
         lon_rad: t.lon_rad,
         depth_m: t.depth_m,
         vel_ned_m_s: t.vel_ned_m_s.to_nalgebra(),
         attitude: t.attitude.to_nalgebra(),
-        distance_m: scalar("TruthState", "distance_m", m.distance_m, 0.0, 1e9).ok()?,
-    })
+        distance_m: t.distance_m,
+    }
 }
 
-/// Largest standard deviation taken as a covariance, m (beyond: not informative).
-const STD_MAX_M: f64 = 1e7;
-/// Largest local coordinate, m.
-const LOCAL_MAX_M: f64 = 1e7;
-
-fn estimate(kind: StreamKind, data: &[u8]) -> Option<EstimateSample> {
-    match kind {
-        StreamKind::Nav => nav(&codec::decode::<NavSolution>(data).ok()?).ok(),
-        StreamKind::Attitude => attitude(&codec::decode::<AttitudeEstimate>(data).ok()?),
-        StreamKind::Fix => fix(&codec::decode::<PositionFix>(data).ok()?).ok(),
-        StreamKind::Lbl => lbl(&codec::decode::<LblSolution>(data).ok()?).ok(),
+fn estimate(value: &Value) -> Option<EstimateSample> {
+    match value {
+        Value::Nav(m) => Some(nav(m)),
+        Value::Attitude(m) => Some(attitude(m)),
+        Value::Fix(m) => Some(fix(m)),
+        Value::Lbl(m) => Some(lbl(m)),
+        _ => None,
     }
 }
 
@@ -339,81 +334,57 @@ fn cov_ne(std_n: f64, std_e: f64, corr: f64) -> Option<Matrix2<f64>> {
     })
 }
 
-fn nav(m: &NavSolution) -> Result<EstimateSample, checked::ValidationError> {
-    const T: &str = "NavSolution";
-    let lat_rad = scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?;
-    let lon_rad = scalar(T, "lon_rad", m.lon_rad, -PI, PI)?;
-    let depth = scalar(
-        T,
-        "depth_m",
-        m.depth_m,
-        limits::DEPTH_MIN_M,
-        limits::DEPTH_MAX_M,
-    )?;
-    let vel = vector::<Ned>(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?.to_nalgebra();
-    let attitude = if m.quat_nb == [0.0; 4] {
-        None
-    } else {
-        Some(quaternion(T, "quat_nb", m.quat_nb)?.to_nalgebra())
-    };
-    for s in m.pos_std_ned_m {
-        scalar(T, "pos_std_ned_m", s, 0.0, STD_MAX_M)?;
+fn nav(m: &Nav) -> EstimateSample {
+    EstimateSample {
+        pos: Some(Horizontal::Geodetic {
+            lat_rad: m.lat_rad,
+            lon_rad: m.lon_rad,
+        }),
+        depth_m: Some(m.depth_m),
+        vel_ned_m_s: Some(m.vel_ned_m_s.to_nalgebra()),
+        attitude: m.attitude.map(|q| q.to_nalgebra()),
+        cov_ne_m2: cov_ne(m.pos_std_ned_m.x(), m.pos_std_ned_m.y(), 0.0),
+        ..empty(m.stamp_ns)
     }
-    Ok(EstimateSample {
-        pos: Some(Horizontal::Geodetic { lat_rad, lon_rad }),
-        depth_m: Some(depth),
-        vel_ned_m_s: Some(vel),
-        attitude,
-        cov_ne_m2: cov_ne(m.pos_std_ned_m[0], m.pos_std_ned_m[1], 0.0),
-        ..empty(m.header.stamp_ns)
-    })
 }
 
-fn attitude(m: &AttitudeEstimate) -> Option<EstimateSample> {
-    let a = checked::Attitude::try_from(m).ok()?;
-    Some(EstimateSample {
+fn attitude(a: &Attitude) -> EstimateSample {
+    EstimateSample {
         attitude: Some(a.attitude.to_nalgebra()),
         att_std_rad: (a.std_rad.iter().all(|s| *s > 0.0)).then_some(a.std_rad.to_nalgebra()),
         ..empty(a.stamp_ns)
-    })
+    }
 }
 
-fn fix(m: &PositionFix) -> Result<EstimateSample, checked::ValidationError> {
-    const T: &str = "PositionFix";
-    let lat_rad = scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?;
-    let lon_rad = scalar(T, "lon_rad", m.lon_rad, -PI, PI)?;
-    let std_n = scalar(T, "std_north_m", m.std_north_m, 0.0, STD_MAX_M)?;
-    let std_e = scalar(T, "std_east_m", m.std_east_m, 0.0, STD_MAX_M)?;
-    let corr = scalar(T, "corr_ne", m.corr_ne, -1.0, 1.0)?;
-    Ok(EstimateSample {
-        pos: Some(Horizontal::Geodetic { lat_rad, lon_rad }),
-        cov_ne_m2: cov_ne(std_n, std_e, corr),
-        ..empty(m.header.stamp_ns)
-    })
+fn fix(m: &Fix) -> EstimateSample {
+    EstimateSample {
+        pos: Some(Horizontal::Geodetic {
+            lat_rad: m.lat_rad,
+            lon_rad: m.lon_rad,
+        }),
+        cov_ne_m2: cov_ne(m.std_north_m, m.std_east_m, m.corr_ne),
+        ..empty(m.stamp_ns)
+    }
 }
 
-fn lbl(m: &LblSolution) -> Result<EstimateSample, checked::ValidationError> {
-    const T: &str = "LblSolution";
-    let north_m = scalar(T, "x_m", m.x_m, -LOCAL_MAX_M, LOCAL_MAX_M)?;
-    let east_m = scalar(T, "y_m", m.y_m, -LOCAL_MAX_M, LOCAL_MAX_M)?;
-    let big = STD_MAX_M * STD_MAX_M;
-    let pxx = scalar(T, "p", m.p[0][0], -big, big)?;
-    let pxy = scalar(T, "p", m.p[0][1], -big, big)?;
-    let pyx = scalar(T, "p", m.p[1][0], -big, big)?;
-    let pyy = scalar(T, "p", m.p[1][1], -big, big)?;
+fn lbl(m: &LblNav) -> EstimateSample {
+    let (pxx, pyy) = (m.p[0][0], m.p[1][1]);
     // Paper 003 §V-A: P_xy, the x-y block of P, is the position covariance.
-    let sym = 0.5 * (pxy + pyx);
+    let sym = 0.5 * (m.p[0][1] + m.p[1][0]);
     let cov = (pxx > 0.0 && pyy > 0.0 && pxx * pyy - sym * sym > 0.0)
         .then(|| Matrix2::new(pxx, sym, sym, pyy));
     let innovation = m.last_innovation_m.is_finite().then_some(Innovation {
         residual_m: m.last_innovation_m,
         transponder_id: m.transponder_id,
-        accepted: m.accepted != 0,
+        accepted: m.accepted,
     });
-    Ok(EstimateSample {
-        pos: Some(Horizontal::Local { north_m, east_m }),
+    EstimateSample {
+        pos: Some(Horizontal::Local {
+            north_m: m.x_m,
+            east_m: m.y_m,
+        }),
         cov_ne_m2: cov,
         innovation,
-        ..empty(m.header.stamp_ns)
-    })
+        ..empty(m.stamp_ns)
+    }
 }

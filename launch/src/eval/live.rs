@@ -4,26 +4,23 @@
 //! at the end of the run. This file adds only what a recording provides and a
 //! tap does not: the run's metadata and the order by stamp.
 
-use std::collections::BTreeMap;
-
+use nauta_log::run::RunInfo;
 use nauta_runtime::Manifest;
 
 use super::Data;
-use super::run_info::{self, RunInfo};
 
 /// What the `nauta.run` record of a recording of this run would say about
 /// its frame: read from the effective manifest, under the key the logger
 /// writes it to.
 pub fn run_info(manifest: &Manifest) -> RunInfo {
     match manifest.to_toml() {
-        Ok(text) => run_info::from_metadata(Some(&BTreeMap::from([("manifest".to_owned(), text)]))),
+        Ok(text) => RunInfo::of_manifest(&text, Some(crate::presets::simulated)),
         Err(e) => {
             tracing::warn!(error = %format!("{e:#}"), "the manifest gives no local frame");
             RunInfo::default()
         }
     }
 }
-
 /// Orders every stream of `data` by stamp, one truth sample per stamp, as
 /// [`Data::read`] leaves a recording (taps receive each publisher's messages
 /// in its order, a restarted or swapped-in instance's after the last one's).

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use nalgebra::{Matrix2, Vector3};
-use nauta_sim::mission::Origin;
+use nauta_log::run::GeoOrigin;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -226,7 +226,7 @@ fn evaluated<'a>(data: &'a Data, eval: &Evaluation) -> Vec<(usize, &'a Stream)> 
 // ---------------------------------------------------------------------------
 
 /// Local (north, east) of a horizontal position in the plot's frame.
-fn local(origin: &Origin, frame: Option<Origin>, p: Horizontal) -> Option<(f64, f64)> {
+fn local(origin: &GeoOrigin, frame: Option<GeoOrigin>, p: Horizontal) -> Option<(f64, f64)> {
     match p {
         Horizontal::Geodetic { lat_rad, lon_rad } => Some(origin.to_local(lat_rad, lon_rad)),
         Horizontal::Local { north_m, east_m } => {
@@ -258,18 +258,18 @@ fn ellipse(center: (f64, f64), cov: &Matrix2<f64>) -> Vec<(f64, f64)> {
 fn trajectory(
     data: &Data,
     eval: &Evaluation,
-    frame: Option<Origin>,
+    frame: Option<GeoOrigin>,
     dir: &Path,
 ) -> anyhow::Result<Option<Plot>> {
     let origin = frame
         .or_else(|| {
-            data.truth.first().map(|t| Origin {
+            data.truth.first().map(|t| GeoOrigin {
                 lat_rad: t.lat_rad,
                 lon_rad: t.lon_rad,
             })
         })
         .or_else(|| {
-            data.gps.first().map(|g| Origin {
+            data.gps.first().map(|g| GeoOrigin {
                 lat_rad: g.lat_rad,
                 lon_rad: g.lon_rad,
             })
@@ -646,13 +646,17 @@ fn ellipse_axes(data: &Data, dir: &Path) -> anyhow::Result<Option<Plot>> {
 // ---------------------------------------------------------------------------
 
 /// 3-D distance from the truth at `stamp` to a transponder, m.
-fn true_range(data: &Data, frame: &Origin, stamp: u64, tx: &Vector3<f64>) -> Option<f64> {
+fn true_range(data: &Data, frame: &GeoOrigin, stamp: u64, tx: &Vector3<f64>) -> Option<f64> {
     let t = compute::truth_at(&data.truth, stamp)?;
     let (n, e) = frame.to_local(t.lat_rad, t.lon_rad);
     Some((Vector3::new(n, e, t.depth_m) - tx).norm())
 }
 
-fn range_residuals(data: &Data, frame: Option<Origin>, dir: &Path) -> anyhow::Result<Option<Plot>> {
+fn range_residuals(
+    data: &Data,
+    frame: Option<GeoOrigin>,
+    dir: &Path,
+) -> anyhow::Result<Option<Plot>> {
     let mut panels = Vec::new();
     let mut caption = Vec::new();
     for s in data.streams.values() {
@@ -714,10 +718,12 @@ fn range_residuals(data: &Data, frame: Option<Origin>, dir: &Path) -> anyhow::Re
                 .run
                 .transponders
                 .iter()
-                .find(|t| t.id == r.transponder_id)
+                .find(|t| t.id == r.transponder_id && t.depth_m.is_finite())
             else {
                 continue;
             };
+            // A transponder's own turnaround, when the site gives one.
+            let t_ta = tx.turnaround_s.unwrap_or(t_ta);
             let txv = Vector3::new(tx.north_m, tx.east_m, tx.depth_m);
             let (Some(d_out), Some(d_back)) = (
                 true_range(data, &frame, r.interrogation_ns, &txv),

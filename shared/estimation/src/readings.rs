@@ -133,6 +133,8 @@ pub struct Truth {
     pub vel_ned_m_s: Vector<Ned>,
     /// Attitude body → NED.
     pub attitude: Rotation<Frd, Ned>,
+    /// Distance travelled over ground since the start, m.
+    pub distance_m: f64,
 }
 
 /// A checked attitude estimate.

@@ -16,10 +16,14 @@
 //! sensor configuration) at the start, [`META_STATS`] (the logger's own
 //! per-channel counts) at the end.
 
+pub mod checked;
 pub mod export;
 pub mod info;
 pub mod reader;
+pub mod run;
 pub mod schema;
+pub mod streams;
+pub mod utc;
 pub mod writer;
 
 pub use info::{ChannelSummary, LogInfo};

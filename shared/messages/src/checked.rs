@@ -357,6 +357,7 @@ impl TryFrom<&TruthState> for Truth {
             )?,
             vel_ned_m_s: vector(T, "vel_ned_m_s", m.vel_ned_m_s, limits::SPEED_M_S)?,
             attitude: quaternion(T, "quat_nb", m.quat_nb)?,
+            distance_m: scalar(T, "distance_m", m.distance_m, 0.0, 1e9)?,
         })
     }
 }

@@ -2,8 +2,10 @@
 //! track and attitude channel, never decimated. Rows are grouped by channel
 //! (truth, estimates, LBL, GPS, attitude; by topic within each) and in
 //! recording order within a channel. A cell is empty where the channel's type
-//! does not carry the value or the value is not finite. Numbers are written
-//! in the shortest form that reads back to the same `f64`.
+//! does not carry the value; a message that fails its checks
+//! ([`crate::checked`]: a non-finite or out-of-range field) is a row of its
+//! stamp and type with every value empty. Numbers are written in the shortest
+//! form that reads back to the same `f64`.
 //!
 //! Columns:
 //! - `time_s`: stamp, s (run clock); `stamp_ns`: the same, exact; `topic`;

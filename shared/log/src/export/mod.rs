@@ -7,7 +7,7 @@
 //! `nauta.PositionFix.v1` (`positioning/fix`), `nauta.GpsFix.v1`
 //! (`sensor/gps`) and `nauta.LblSolution.v1` (`lbl/nav`). `lbl/nav` is in
 //! local north/east metres; it is placed on the globe with the run's origin
-//! ([`site`]: `--origin`, else the `nauta.run` metadata) and left out of the
+//! ([`crate::run`]: `--origin`, else the `nauta.run` metadata) and left out of the
 //! map formats, with a note, when there is none. Latitude and longitude are
 //! radians on the wire and degrees in every export (DESIGN §4).
 //!
@@ -41,8 +41,6 @@ pub mod geojson;
 pub mod gpx;
 pub mod jsonschema;
 pub mod kml;
-pub mod site;
-pub mod time;
 pub mod tracks;
 mod xml;
 
@@ -51,8 +49,8 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-pub use site::{GeoOrigin, RunInfo, Transponder};
-pub use time::UtcTime;
+pub use crate::run::{GeoOrigin, Presets, Resolver, RunInfo, Transponder};
+pub use crate::utc::UtcTime;
 pub use tracks::{Landmark, LandmarkKind, Sample, Track, TrackKind};
 
 /// Track points per second of the map formats unless told otherwise.
@@ -140,9 +138,6 @@ pub enum KmlAltitude {
     Absolute,
 }
 
-/// Finds the LBL transponders of a run from its `nauta.run` metadata.
-pub type TransponderResolver = fn(&BTreeMap<String, String>) -> Vec<Transponder>;
-
 /// How to export.
 #[derive(Debug, Clone)]
 pub struct ExportOptions {
@@ -158,10 +153,10 @@ pub struct ExportOptions {
     /// UTC time of run-clock stamp 0, overriding the recording's metadata
     /// (GPX `time`).
     pub utc_start: Option<UtcTime>,
-    /// Finds the LBL transponders of a run from its `nauta.run` metadata
-    /// (the front end knows the simulator's layouts; this library only reads
-    /// explicit `transponders` lists, see [`site`]).
-    pub transponders_from_run: Option<TransponderResolver>,
+    /// What the simulator's scenarios add to the `nauta.run` metadata (the
+    /// front end knows the simulator's layouts; this library only reads
+    /// explicit `transponders` lists, see [`crate::run`]).
+    pub presets: Option<Resolver>,
 }
 
 impl ExportOptions {
@@ -173,7 +168,7 @@ impl ExportOptions {
             kml_altitude: KmlAltitude::default(),
             origin: None,
             utc_start: None,
-            transponders_from_run: None,
+            presets: None,
         }
     }
 
@@ -332,11 +327,12 @@ pub fn export(
     };
     let mut messages_read = 0u64;
     let mut failed: Option<ExportError> = None;
-    let rec = crate::reader::read_with_progress(input, &mut on_progress, |ch, msg| {
+    let wanted = |ch: &crate::Channel| TrackKind::is_exported(&ch.type_name);
+    let rec = crate::streams::visit(input, &mut on_progress, wanted, |m| {
         messages_read += 1;
-        collector.observe(ch, msg);
+        collector.observe(m.channel, m.recorded, m.checked);
         if let Some(f) = fox.as_mut()
-            && let Err(e) = f.message(ch, msg)
+            && let Err(e) = f.message(m.channel, m.recorded)
         {
             failed = Some(e);
             anyhow::bail!("export stopped");
@@ -365,12 +361,15 @@ pub fn export(
         ));
     }
     notes.extend(rec.recovery.damage_notes());
-    let run = RunInfo::resolve(
+    let run = RunInfo::read(
         rec.metadata(crate::META_RUN),
-        options,
-        &mut notes,
-        format.is_map() || format == Format::Foxglove,
+        &crate::run::Overrides {
+            origin: options.origin,
+            utc_start: options.utc_start,
+        },
+        options.presets,
     );
+    notes.extend(run.notes.iter().cloned());
     let collected = collector.finish(&run, format, &mut notes);
     let mut decode_failures = collected.decode_failures.clone();
 
@@ -446,9 +445,13 @@ pub fn export(
             }
             let file = part.take_file()?;
             let mut w = BufWriter::new(file);
-            let written = csv::write(&mut w, &collected.tracks, run.origin.as_ref())
-                .and_then(|n| w.flush().map(|()| n))
-                .map_err(|e| part.write_error(e))?;
+            let written = csv::write(
+                &mut w,
+                &collected.tracks,
+                run.origin.as_ref().map(|o| &o.value),
+            )
+            .and_then(|n| w.flush().map(|()| n))
+            .map_err(|e| part.write_error(e))?;
             summary.written = written;
             summary.tracks = collected
                 .tracks

@@ -307,6 +307,7 @@ fn bad_messages_are_skipped_and_counted() {
             header: Header::new(i * 1_000_000_000, i, Role::Sensor, 0),
             lat_rad: if i == 3 { f64::NAN } else { lat },
             lon_rad: lon,
+            quat_nb: [1.0, 0.0, 0.0, 0.0],
             ..Default::default()
         };
         w.write_message("sim/truth", i, &m).expect("write");

@@ -1,18 +1,17 @@
 //! The tracks of a recording: every message of a position (or attitude) type,
-//! decoded into a [`Sample`] in the units of the exports (degrees, metres),
+//! checked ([`crate::checked`]) and turned into a [`Sample`] in the units of the exports (degrees, metres),
 //! decimated for the map formats; and the buoy's broadcast positions.
 
 use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::collections::{BTreeMap, HashMap};
 
-use nalgebra::UnitQuaternion;
 use nauta_estimation::attitude::{to_euler, wrap_pi};
 use nauta_messages::{
-    AttitudeEstimate, BuoyRange, GpsFix, LblSolution, Message, NavSolution, PositionFix,
-    TruthState, codec,
+    AttitudeEstimate, BuoyRange, GpsFix, LblSolution, Message, NavSolution, PositionFix, TruthState,
 };
 
 use super::{Format, RunInfo};
+use crate::checked::{Checked, Rejection, Value};
 use crate::reader::{Channel, RecordedMessage, Recording};
 
 /// What a track's type carries.
@@ -44,6 +43,11 @@ impl TrackKind {
             AttitudeEstimate::TYPE_NAME => TrackKind::Attitude,
             _ => return None,
         })
+    }
+
+    /// True for the types the export reads: the tracks and the buoy.
+    pub fn is_exported(type_name: &str) -> bool {
+        TrackKind::of(type_name).is_some() || type_name == BuoyRange::TYPE_NAME
     }
 
     /// True for the kinds that carry a position.
@@ -137,70 +141,56 @@ impl Sample {
     }
 }
 
-/// Roll, pitch and yaw of `q_nb` `[w, x, y, z]`, degrees (NaN if it is not a
-/// finite, non-zero quaternion).
-fn rpy_deg(q: [f64; 4]) -> [f64; 3] {
-    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if !(norm.is_finite() && norm > 0.0) {
-        return NAN3;
-    }
-    let uq = UnitQuaternion::from_quaternion(Rotation::<Frd, Ned>::quaternion_from_wxyz(q));
-    let (r, p, y) = to_euler(&uq);
+/// Roll, pitch and yaw (ZYX) of a body → NED attitude, degrees.
+fn rpy_deg(q: &Rotation<Frd, Ned>) -> [f64; 3] {
+    let (r, p, y) = to_euler(&q.to_nalgebra());
     [r.to_degrees(), p.to_degrees(), y.to_degrees()]
 }
 
-fn sample_of(kind: TrackKind, data: &[u8], base: Sample) -> Result<Sample, codec::DecodeError> {
+/// The sample of a checked value (`None`: not a track type).
+fn sample_of(value: &Value, base: Sample) -> Option<Sample> {
     let mut s = base;
-    match kind {
-        TrackKind::Truth => {
-            let m: TruthState = codec::decode(data)?;
-            s.seq = m.header.seq;
+    match value {
+        Value::Truth(m) => {
             s.set_geodetic(m.lat_rad, m.lon_rad);
             s.depth_m = m.depth_m;
-            s.vel_ned_m_s = m.vel_ned_m_s;
-            s.rpy_deg = rpy_deg(m.quat_nb);
+            s.vel_ned_m_s = m.vel_ned_m_s.to_array();
+            s.rpy_deg = rpy_deg(&m.attitude);
         }
-        TrackKind::Nav => {
-            let m: NavSolution = codec::decode(data)?;
-            s.seq = m.header.seq;
+        Value::Nav(m) => {
             s.set_geodetic(m.lat_rad, m.lon_rad);
             s.depth_m = m.depth_m;
-            s.vel_ned_m_s = m.vel_ned_m_s;
-            s.rpy_deg = rpy_deg(m.quat_nb);
-            s.pos_std_ned_m = m.pos_std_ned_m;
-            s.vel_std_ned_m_s = m.vel_std_ned_m_s;
+            s.vel_ned_m_s = m.vel_ned_m_s.to_array();
+            if let Some(q) = &m.attitude {
+                s.rpy_deg = rpy_deg(q);
+            }
+            s.pos_std_ned_m = m.pos_std_ned_m.to_array();
+            s.vel_std_ned_m_s = m.vel_std_ned_m_s.to_array();
         }
-        TrackKind::Fix => {
-            let m: PositionFix = codec::decode(data)?;
-            s.seq = m.header.seq;
+        Value::Fix(m) => {
             s.set_geodetic(m.lat_rad, m.lon_rad);
             s.pos_std_ned_m = [m.std_north_m, m.std_east_m, f64::NAN];
             s.corr_ne = m.corr_ne;
         }
-        TrackKind::Gps => {
-            let m: GpsFix = codec::decode(data)?;
-            s.seq = m.header.seq;
+        Value::Gps(m) => {
             s.set_geodetic(m.lat_rad, m.lon_rad);
             // The GPS σ is per horizontal axis.
             s.pos_std_ned_m = [m.horizontal_std_m, m.horizontal_std_m, f64::NAN];
         }
-        TrackKind::Lbl => {
-            let m: LblSolution = codec::decode(data)?;
-            s.seq = m.header.seq;
+        Value::Lbl(m) => {
             s.north_m = m.x_m;
             s.east_m = m.y_m;
             let (pnn, pee, pne) = (m.p[0][0], m.p[1][1], m.p[0][1]);
             s.pos_std_ned_m = [pnn.sqrt(), pee.sqrt(), f64::NAN];
             s.corr_ne = pne / (pnn * pee).sqrt();
         }
-        TrackKind::Attitude => {
-            let m: AttitudeEstimate = codec::decode(data)?;
-            s.seq = m.header.seq;
-            s.rpy_deg = rpy_deg(m.quat_nb);
-            s.att_std_ned_deg = m.std_rad.map(f64::to_degrees);
+        Value::Attitude(m) => {
+            s.rpy_deg = rpy_deg(&m.attitude);
+            s.att_std_ned_deg = m.std_rad.to_array().map(f64::to_degrees);
         }
+        _ => return None,
     }
-    Ok(s)
+    Some(s)
 }
 
 /// The messages of one channel of a track type.
@@ -350,8 +340,13 @@ impl Collector {
         }
     }
 
-    /// Takes in one recorded message.
-    pub fn observe(&mut self, ch: &Channel, msg: &RecordedMessage<'_>) {
+    /// Takes in one recorded message and its checked value.
+    pub fn observe(
+        &mut self,
+        ch: &Channel,
+        msg: &RecordedMessage<'_>,
+        checked: Option<&Result<Checked, Rejection>>,
+    ) {
         let slot = *self.slots.entry(ch.id).or_insert_with(|| {
             if ch.message_encoding != crate::MESSAGE_ENCODING {
                 return Slot::Ignore;
@@ -377,33 +372,51 @@ impl Collector {
                 None => Slot::Ignore,
             }
         });
+        let Some(checked) = checked else {
+            return;
+        };
         let base = Sample::empty(msg.publish_time_ns, msg.log_time_ns, 0);
-        match slot {
-            Slot::Ignore => {}
-            Slot::Buoy => match codec::decode::<BuoyRange>(msg.data) {
-                Ok(m) => {
-                    let mut s = base;
-                    s.set_geodetic(m.buoy_lat_rad, m.buoy_lon_rad);
-                    if s.has_position() {
-                        self.buoy.push(Landmark {
-                            kind: LandmarkKind::Buoy,
-                            name: format!("buoy {:.1} s", m.header.stamp_ns as f64 * 1e-9),
-                            lat_deg: s.lat_deg,
-                            lon_deg: s.lon_deg,
-                            depth_m: m.buoy_depth_m,
-                            stamp_ns: Some(m.header.stamp_ns),
-                        });
-                    }
-                }
-                Err(_) => *self.failures.entry(ch.topic.clone()).or_insert(0) += 1,
-            },
-            Slot::Track(i) => {
+        match (slot, checked) {
+            (Slot::Ignore, _) => {}
+            (_, Err(Rejection::Undecodable(_))) => {
+                *self.failures.entry(ch.topic.clone()).or_insert(0) += 1
+            }
+            (
+                Slot::Buoy,
+                Ok(Checked {
+                    value: Value::Buoy(m),
+                    ..
+                }),
+            ) => {
+                let mut s = base;
+                s.set_geodetic(m.buoy_lat_rad, m.buoy_lon_rad);
+                self.buoy.push(Landmark {
+                    kind: LandmarkKind::Buoy,
+                    name: format!("buoy {:.1} s", m.stamp_ns as f64 * 1e-9),
+                    lat_deg: s.lat_deg,
+                    lon_deg: s.lon_deg,
+                    depth_m: m.buoy_depth_m,
+                    stamp_ns: Some(m.stamp_ns),
+                });
+            }
+            (Slot::Buoy, _) => {}
+            (Slot::Track(i), checked) => {
                 let Some(b) = self.builders.get_mut(i) else {
                     return;
                 };
-                match sample_of(b.track.kind, msg.data, base) {
-                    Ok(s) => b.push(s, self.keep_all, self.period_ns),
-                    Err(_) => *self.failures.entry(ch.topic.clone()).or_insert(0) += 1,
+                // A message that failed its checks is a row of its stamp and
+                // sequence number with no values (CSV), and no map point.
+                let s = match checked {
+                    Ok(c) => sample_of(&c.value, Sample { seq: c.seq, ..base }),
+                    Err(Rejection::Invalid { stamp_ns, seq, .. }) => Some(Sample {
+                        stamp_ns: *stamp_ns,
+                        seq: *seq,
+                        ..base
+                    }),
+                    Err(Rejection::Undecodable(_)) => None,
+                };
+                if let Some(s) = s {
+                    b.push(s, checked.is_err(), self.keep_all, self.period_ns);
                 }
             }
         }
@@ -425,7 +438,7 @@ impl Collector {
             .collect();
         for t in &mut tracks {
             if t.kind.is_local() {
-                match &run.origin {
+                match run.origin.as_ref().map(|o| &o.value) {
                     Some(o) => {
                         for s in &mut t.samples {
                             if s.north_m.is_finite() && s.east_m.is_finite() {
@@ -454,9 +467,9 @@ impl Collector {
                         t.topic, t.messages
                     ));
                 }
-            } else if t.invalid > 0 && t.kind.is_position() {
+            } else if t.invalid > 0 {
                 notes.push(format!(
-                    "{}: {} of {} messages have no usable position (non-finite or out of range){}",
+                    "{}: {} of {} messages failed their checks (a non-finite or out-of-range field){}",
                     t.topic,
                     t.invalid,
                     t.messages,
@@ -468,7 +481,7 @@ impl Collector {
 
         let mut landmarks = self.buoy;
         if !run.transponders.is_empty() && format.is_map() {
-            match &run.origin {
+            match run.origin.as_ref().map(|o| &o.value) {
                 Some(o) => landmarks.extend(run.transponders.iter().map(|t| {
                     let mut s = Sample::empty(0, 0, 0);
                     let (lat, lon) = o.to_geodetic(t.north_m, t.east_m);
@@ -497,14 +510,16 @@ impl Collector {
 }
 
 impl Builder {
-    fn push(&mut self, s: Sample, keep_all: bool, period_ns: u64) {
+    /// Takes a sample; `rejected`: its message failed its checks.
+    fn push(&mut self, s: Sample, rejected: bool, keep_all: bool, period_ns: u64) {
         let t = &mut self.track;
         t.messages += 1;
-        let usable = if t.kind.is_local() {
-            s.north_m.is_finite() && s.east_m.is_finite()
-        } else {
-            !t.kind.is_position() || s.has_position()
-        };
+        let usable = !rejected
+            && if t.kind.is_local() {
+                s.north_m.is_finite() && s.east_m.is_finite()
+            } else {
+                !t.kind.is_position() || s.has_position()
+            };
         if !usable {
             t.invalid += 1;
         }
