@@ -4,21 +4,9 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-mod bench;
-mod calibrate;
-mod children;
-mod eval;
-mod export;
-mod import;
-mod launch;
-mod logcmd;
-mod monitor;
-mod pipeline;
-mod presets;
-mod report;
-mod rundir;
-mod summary;
-mod supervisor;
+use nauta_bench as bench;
+use nauta_launcher::{launch, logcmd, pipeline};
+use nauta_tools::{calibrate, eval, export, import, report};
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
 #[derive(Debug, Parser)]

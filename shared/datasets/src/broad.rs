@@ -41,7 +41,7 @@
 //! computed in either frame (tested below).
 //!
 //! "North" is whatever north the reference's Earth frame uses: see
-//! `launch/src/bench/attitude.rs` for how the benchmark sets the declination.
+//! `shared/bench/src/attitude.rs` for how the benchmark sets the declination.
 
 use nauta_estimation::frames::{Frd, Ned, Rotation};
 use std::fs::File;

@@ -20,6 +20,7 @@
 
 pub mod environment;
 pub mod guidance;
+pub mod manoeuvre;
 pub mod mission;
 pub mod noise;
 pub mod params;

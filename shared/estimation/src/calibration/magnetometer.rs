@@ -41,8 +41,6 @@
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
 use thiserror::Error;
 
-use super::pso::{PsoParams, fit_pso};
-
 /// A magnetometer calibration: `m = W (m̃ − h)` (C1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MagCalibration {
@@ -250,18 +248,4 @@ fn symmetric_sqrt(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     }
     let d = Matrix3::from_diagonal(&eig.eigenvalues.map(f64::sqrt));
     Some(eig.eigenvectors * d * eig.eigenvectors.transpose())
-}
-
-/// Fits with `method` ([`fit_ellipsoid`], or [`fit_pso`] with `pso` and `seed`).
-pub fn fit(
-    samples: &[Vector3<f64>],
-    reference_norm_ut: f64,
-    method: MagFitMethod,
-    pso: &PsoParams,
-    seed: u64,
-) -> Result<MagCalibration, MagCalibrationError> {
-    match method {
-        MagFitMethod::LeastSquares => fit_ellipsoid(samples, reference_norm_ut),
-        MagFitMethod::Pso => fit_pso(samples, reference_norm_ut, pso, seed),
-    }
 }

@@ -25,7 +25,25 @@ mod still;
 mod tests;
 
 pub use magnetometer::{
-    MagCalibration, MagCalibrationError, MagFitMethod, NormSpread, fit, fit_ellipsoid,
+    MagCalibration, MagCalibrationError, MagFitMethod, NormSpread, fit_ellipsoid,
 };
 pub use pso::{PsoParams, fit_pso};
 pub use still::{StaticOffsets, StillCalibration, StillCalibrationError};
+
+use nalgebra::Vector3;
+
+// Here rather than in `magnetometer.rs`, which `pso.rs` builds on: the two
+// fits import one way only.
+/// Fits with `method` ([`fit_ellipsoid`], or [`fit_pso`] with `pso` and `seed`).
+pub fn fit(
+    samples: &[Vector3<f64>],
+    reference_norm_ut: f64,
+    method: MagFitMethod,
+    pso: &PsoParams,
+    seed: u64,
+) -> Result<MagCalibration, MagCalibrationError> {
+    match method {
+        MagFitMethod::LeastSquares => fit_ellipsoid(samples, reference_norm_ut),
+        MagFitMethod::Pso => fit_pso(samples, reference_norm_ut, pso, seed),
+    }
+}

@@ -26,7 +26,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
 
-use crate::pipeline;
+use nauta_launcher::pipeline;
 
 /// Options of `nauta bench chaos`.
 #[derive(Debug, Clone, clap::Args)]

@@ -15,7 +15,7 @@
 //!   attitude process (`pf`, alignment over the first 400 samples: every
 //!   trial starts at rest), by default site Berlin (52.51° N, 13.32° E, where
 //!   BROAD was recorded) with declination 0, because the reference frame's
-//!   north is magnetic north (`launch/src/bench/attitude.rs` explains the
+//!   north is magnetic north (`shared/bench/src/attitude.rs` explains the
 //!   check); `--site` and `--declination` for other data in BROAD's format;
 //!   and `nauta.import` naming the source.
 

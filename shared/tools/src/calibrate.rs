@@ -76,7 +76,7 @@ fn simulated(
         .map_err(|e| anyhow::anyhow!("{place}: {e}"))?;
     let field = env.magnetic.ned_t;
     let samples =
-        crate::bench::attitude::magnetometer_manoeuvre(params.sensors.imu.mag, &field, args.seed)?;
+        nauta_sim::manoeuvre::magnetometer_manoeuvre(params.sensors.imu.mag, &field, args.seed)?;
     Ok((samples, field.norm() * 1e6))
 }
 

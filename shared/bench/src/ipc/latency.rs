@@ -240,7 +240,7 @@ pub fn busy(prefix: &str, run: Run) -> anyhow::Result<Vec<u64>> {
     })
 }
 
-fn busy_peer(ctx: &mut PeerCtx) -> anyhow::Result<()> {
+pub(super) fn busy_peer(ctx: &mut PeerCtx) -> anyhow::Result<()> {
     let run = Run::from_ctx(ctx)?;
     let prefix = ctx.str("prefix")?.to_string();
     peer_node(&prefix, |node| {
@@ -444,7 +444,7 @@ fn block_waitset(
     }
 }
 
-fn wakeup_peer(ctx: &mut PeerCtx) -> anyhow::Result<()> {
+pub(super) fn wakeup_peer(ctx: &mut PeerCtx) -> anyhow::Result<()> {
     let run = Run::from_ctx(ctx)?;
     let prefix = ctx.str("prefix")?.to_string();
     peer_node(&prefix, |node| {
@@ -508,22 +508,6 @@ fn wakeup_peer(ctx: &mut PeerCtx) -> anyhow::Result<()> {
         }
         ctx.done()
     })
-}
-
-// ---------------------------------------------------------------------------
-// 5. 64 KiB: iceoryx2 (loan, write in place) vs Unix socket + bincode.
-// ---------------------------------------------------------------------------
-
-/// Runs the peer side of a latency case; `Ok(false)` if `case` is not one.
-pub fn peer(ctx: &mut PeerCtx) -> anyhow::Result<bool> {
-    match ctx.case.as_str() {
-        "busy" => busy_peer(ctx)?,
-        "wakeup" => wakeup_peer(ctx)?,
-        "large-iceoryx2" => super::large::large_iceoryx2_peer(ctx)?,
-        "large-uds" => super::large::large_uds_peer(ctx)?,
-        _ => return Ok(false),
-    }
-    Ok(true)
 }
 
 #[cfg(test)]

@@ -117,7 +117,7 @@ pub fn evaluate(file: &Path, data: &Data) -> anyhow::Result<Evaluation> {
 /// Reads `file` with a progress bar on a terminal.
 pub fn read(file: &Path) -> anyhow::Result<Data> {
     let total = std::fs::metadata(file).map(|m| m.len()).unwrap_or(0);
-    let bar = crate::logcmd::progress_bar(total, "reading");
+    let bar = crate::progress::progress_bar(total, "reading");
     let data = Data::read(file, |done, _| bar.set_position(done));
     bar.finish_and_clear();
     data

@@ -13,10 +13,10 @@ use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
 use nauta_runtime::{Connect, Context, Manifest, Subscriber, services};
 
-use crate::eval::{self, Data, Evaluation, data::StreamKind};
+use nauta_tools::eval::{self, Data, Evaluation, data::StreamKind};
 
 /// A type-erased subscriber.
-pub trait Tap {
+pub trait Tap: std::fmt::Debug {
     /// Service name.
     fn service(&self) -> &str;
     /// Receives everything available, passing each message to `obs`.
@@ -34,6 +34,16 @@ pub trait Tap {
     fn latest(&self) -> Option<&(u64, Vec<u8>)>;
     /// Attaches to the publishers present now; false while there is none.
     fn connect(&self) -> anyhow::Result<bool>;
+}
+
+// By hand: the subscriber is an iceoryx2 port.
+impl<M: Message> std::fmt::Debug for TypedTap<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TypedTap")
+            .field("type", &M::TYPE_NAME)
+            .field("span", &self.span)
+            .finish_non_exhaustive()
+    }
 }
 
 struct TypedTap<M: Message> {
@@ -131,7 +141,7 @@ pub fn tap(ctx: &Context, service: &str, type_name: &str) -> anyhow::Result<(Box
 /// every estimate stream, kept as `nauta eval` reads them from a recording (so
 /// the summary's errors are eval's), a digest of each estimate stream, and
 /// each process's latest health.
-#[derive(Default)]
+#[derive(Debug, Default)]
 pub struct Observer {
     /// The truth and the estimate streams, checked as eval checks them.
     data: Data,
@@ -235,7 +245,7 @@ mod tests {
     const DEPTH_M: f64 = 10.0;
 
     fn survey() -> Manifest {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("survey.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch/survey.toml");
         Manifest::load(&path).expect("launch/survey.toml loads")
     }
 

@@ -84,6 +84,7 @@ fn state_name(s: u32) -> &'static str {
 }
 
 /// Writes a run's `status.json`.
+#[derive(Debug)]
 pub struct StatusWriter {
     path: PathBuf,
     namespace: String,

@@ -160,18 +160,17 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 use nauta_datasets::broad::{self, BroadTrial};
 use nauta_estimation::calibration::{self, MagCalibration, MagFitMethod, PsoParams};
 use nauta_estimation::frames::{Frd, Ned, Rotation, Vector};
 use nauta_estimation::mekf::{MagneticReference, Mekf, MekfConfig, MekfParams};
 use nauta_estimation::pf::{ParticleFilter, PfConfig, PfParams, aiding_quaternion};
 use nauta_estimation::{AttitudeError, AttitudeEstimator, GyroIntegrator, HeadingInclinationError};
+use nauta_sim::manoeuvre::magnetometer_manoeuvre;
 use nauta_sim::mission::Origin;
-use nauta_sim::noise::{MagnetometerNoise, MagnetometerSpec};
+use nauta_sim::noise::MagnetometerSpec;
 use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use serde_json::{Map, Value, json};
 
 /// The variants, in the attitude service's order.
@@ -183,8 +182,6 @@ const BROAD_LATITUDE_DEG: f64 = 52.51;
 /// Simulator runs: length, s, and seed.
 const SIM_DURATION_S: f64 = 600.0;
 const SIM_SEED: u64 = 7;
-/// Magnetometer calibration samples for the simulator runs.
-const SIM_CALIBRATION_SAMPLES: usize = 2000;
 
 /// Parameters of the variants under test.
 #[derive(Debug, Clone, Copy)]
@@ -468,37 +465,6 @@ struct SimSample {
     accel: Vector<Frd>,
     mag: Vector<Frd>,
     truth: UnitQuaternion<f64>,
-}
-
-/// A uniformly distributed attitude (Shoemake 1992, from three uniforms).
-fn random_attitude(rng: &mut ChaCha8Rng) -> UnitQuaternion<f64> {
-    let (u1, u2, u3): (f64, f64, f64) = (rng.random(), rng.random(), rng.random());
-    let tau = std::f64::consts::TAU;
-    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
-    UnitQuaternion::new_normalize(Quaternion::new(
-        a * (tau * u2).sin(),
-        a * (tau * u2).cos(),
-        b * (tau * u3).sin(),
-        b * (tau * u3).cos(),
-    ))
-}
-
-/// A calibration manoeuvre on deck, simulated: the magnetometer `spec` (its
-/// hard and soft iron and noise) turned through 2,000 random attitudes in the
-/// field `field_ned_t` (T); the readings, µT.
-pub fn magnetometer_manoeuvre(
-    spec: MagnetometerSpec,
-    field_ned_t: &Vector3<f64>,
-    seed: u64,
-) -> anyhow::Result<Vec<Vector3<f64>>> {
-    let mut noise = MagnetometerNoise::new(spec)?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    Ok((0..SIM_CALIBRATION_SAMPLES)
-        .map(|_| {
-            let q = random_attitude(&mut rng);
-            noise.next(&mut rng, q.inverse_transform_vector(field_ned_t)) * 1e6
-        })
-        .collect())
 }
 
 /// Paper 000 §IV-A's magnetometer calibration for a simulated run: the

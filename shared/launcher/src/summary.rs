@@ -9,9 +9,9 @@ use nauta_messages::{ATTITUDE_ESTIMATE_SERVICE, IMU_SERVICE, TRUTH_SERVICE};
 use nauta_runtime::{LoopExit, Manifest, Namespace};
 use serde::Serialize;
 
-use crate::eval::{ErrorSample, Evaluation, Metrics};
 use crate::monitor::{Observer, Tap};
 use crate::supervisor::Supervisor;
+use nauta_tools::eval::{ErrorSample, Evaluation, Metrics};
 
 /// The summary of a finished run.
 #[derive(Debug, Clone, Serialize)]
@@ -158,6 +158,7 @@ pub enum Exit {
 }
 
 /// What a finished run hands to [`RunSummary::new`].
+#[derive(Debug)]
 pub struct Report<'a> {
     /// The effective manifest.
     pub manifest: &'a Manifest,

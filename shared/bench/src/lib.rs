@@ -1,4 +1,5 @@
-//! `nauta bench ...`: benchmarks that print figures (JSON with `--json`).
+//! `nauta bench ...` as a library: benchmarks that print figures (JSON with
+//! `--json`). The `nauta` binary dispatches to them.
 
 pub mod attitude;
 pub mod chaos;

@@ -442,8 +442,21 @@ fn measure(json: bool) -> anyhow::Result<()> {
 /// The peer side: `nauta __ipc-peer <case> key=value...`.
 pub fn peer(args: &[String]) -> anyhow::Result<()> {
     let mut ctx = PeerCtx::from_args(args)?;
-    if latency::peer(&mut ctx)? || throughput::peer(&mut ctx)? {
+    if latency_peer(&mut ctx)? || throughput::peer(&mut ctx)? {
         return Ok(());
     }
     bail!("__ipc-peer: unknown case {:?}", ctx.case)
+}
+
+/// Runs the peer side of a latency case (small messages in `latency`, 64 KiB
+/// in `large`, which builds on it); `Ok(false)` if `case` is not one.
+fn latency_peer(ctx: &mut common::PeerCtx) -> anyhow::Result<bool> {
+    match ctx.case.as_str() {
+        "busy" => latency::busy_peer(ctx)?,
+        "wakeup" => latency::wakeup_peer(ctx)?,
+        "large-iceoryx2" => large::large_iceoryx2_peer(ctx)?,
+        "large-uds" => large::large_uds_peer(ctx)?,
+        _ => return Ok(false),
+    }
+    Ok(true)
 }

@@ -71,7 +71,7 @@ const READY_TIMEOUT: Duration = Duration::from_secs(30);
 /// How long a process may take to stop after SIGTERM before it is killed.
 const STOP_TIMEOUT: Duration = Duration::from_secs(5);
 
-#[derive(Clone)]
+#[derive(Debug, Clone)]
 struct Proc {
     name: String,
     bin: PathBuf,
@@ -85,6 +85,7 @@ impl Proc {
 }
 
 /// A checked manifest and its processes in start order.
+#[derive(Debug)]
 pub struct Plan {
     /// The effective manifest (overrides applied).
     pub manifest: Manifest,

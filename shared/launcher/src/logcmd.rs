@@ -48,28 +48,10 @@ pub struct ReplayArgs {
     pub set: Vec<String>,
 }
 
-/// A progress bar on stderr for reading `total` bytes, shown only on a terminal.
-pub fn progress_bar(total: u64, what: &str) -> indicatif::ProgressBar {
-    let bar = if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-        indicatif::ProgressBar::new(total)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{msg} [{bar:30}] {bytes}/{total_bytes} {bytes_per_sec} eta {eta}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar.set_message(what.to_owned());
-    bar
-}
-
 /// `nauta log info FILE [--json]`.
 pub fn info(args: &InfoArgs) -> anyhow::Result<ExitCode> {
     let total = std::fs::metadata(&args.file).map(|m| m.len()).unwrap_or(0);
-    let bar = progress_bar(total, "reading");
+    let bar = nauta_tools::progress::progress_bar(total, "reading");
     let info = nauta_log::info::summarise(&args.file, |done, _| bar.set_position(done))?;
     bar.finish_and_clear();
     if args.json {

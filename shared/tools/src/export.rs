@@ -122,7 +122,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
 
     remove_part_file_on_signal(&args.output)?;
     let total = std::fs::metadata(&args.file).map(|m| m.len()).unwrap_or(0);
-    let bar = crate::logcmd::progress_bar(total, "exporting");
+    let bar = crate::progress::progress_bar(total, "exporting");
     let result = export::export(&args.file, &args.output, &options, |done, _| {
         bar.set_position(done)
     });
