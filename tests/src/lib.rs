@@ -685,9 +685,9 @@ pub fn run_python(script: &str, args: &[&std::ffi::OsStr]) -> String {
 
 /// Runs `nauta ARGS` from the workspace root to its end: (exit code, stdout,
 /// stderr).
-pub fn nauta_cli(args: &[&std::ffi::OsStr]) -> (Option<i32>, String, String) {
+pub fn nauta_cli<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Option<i32>, String, String) {
     let out = Command::new(bin("nauta"))
-        .args(args)
+        .args(args.iter().map(AsRef::as_ref))
         .current_dir(workspace_root())
         .stdin(Stdio::null())
         .output()
@@ -705,12 +705,7 @@ pub fn nauta_cli(args: &[&std::ffi::OsStr]) -> (Option<i32>, String, String) {
 
 /// `nauta status --json --namespace NS`, once the run answers.
 pub fn status_json(ns: &str) -> Option<serde_json::Value> {
-    let (code, out, _) = nauta_cli(&[
-        "status".as_ref(),
-        "--json".as_ref(),
-        "--namespace".as_ref(),
-        ns.as_ref(),
-    ]);
+    let (code, out, _) = nauta_cli(&["status", "--json", "--namespace", ns]);
     (code == Some(0)).then(|| serde_json::from_str(&out).ok())?
 }
 
@@ -759,4 +754,32 @@ pub fn wait_running_pid(wd: &Watchdog, ns: &str, name: &str) -> u32 {
         "process {name} of run {ns} never ran"
     );
     pid.unwrap_or_else(|| panic!("process {name} of run {ns}: no pid"))
+}
+
+/// True when process `pid` has exited: no `/proc` entry, or a zombie
+/// waiting for its parent to reap it (it runs nothing).
+pub fn process_gone(pid: u32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Err(_) => true,
+        // A zombie waiting for its new parent to reap it runs nothing.
+        Ok(stat) => stat
+            .rsplit_once(") ")
+            .is_some_and(|(_, rest)| rest.starts_with('Z')),
+    }
+}
+
+/// `nauta swap attitude VARIANT`, asked again while it is refused (a
+/// previous swap or a restart still starting, no snapshot yet).
+pub fn swap_when_accepted(wd: &Watchdog, ns: &Namespace, variant: &str) {
+    let mut tries = 0;
+    loop {
+        let (code, _, err) = nauta_cli(&["swap", "attitude", variant, "--namespace", ns.as_str()]);
+        if code == Some(0) {
+            return;
+        }
+        tries += 1;
+        assert!(tries < 200, "swap to {variant} refused: {err}");
+        wd.check();
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }

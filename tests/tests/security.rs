@@ -304,12 +304,7 @@ fn the_files_of_a_running_pipeline_are_private() {
         }),
         "the attitude process never ran"
     );
-    let (code, out, err) = nauta_cli(&[
-        "restart".as_ref(),
-        "attitude".as_ref(),
-        "--namespace".as_ref(),
-        ns.as_str().as_ref(),
-    ]);
+    let (code, out, err) = nauta_cli(&["restart", "attitude", "--namespace", ns.as_str()]);
     assert_eq!(code, Some(0), "restart refused\n{out}{err}");
     let run_dir = runs_dir_path().join(ns.as_str());
     let snapshot = run_dir.join("snapshot-attitude-1.bin");

@@ -92,6 +92,8 @@ use crate::earth::{
 };
 
 #[cfg(test)]
+mod refusal_tests;
+#[cfg(test)]
 mod tests;
 
 /// Largest |latitude| the mechanization accepts, rad (89°): the NED frame and the
