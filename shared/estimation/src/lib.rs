@@ -51,6 +51,7 @@ pub mod local;
 pub mod mekf;
 pub mod params;
 pub mod pf;
+pub mod predictor;
 pub mod readings;
 pub mod role;
 pub mod strapdown;
