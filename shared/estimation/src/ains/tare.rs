@@ -91,7 +91,10 @@ mod tests {
         t.push_surface(0.05);
         assert!((t.offset_m() - 0.05).abs() < 1e-15);
         t.end_session();
-        assert!((t.depth_m(3.05) - 3.0).abs() < 1e-12, "kept while submerged");
+        assert!(
+            (t.depth_m(3.05) - 3.0).abs() < 1e-12,
+            "kept while submerged"
+        );
         for _ in 0..3 {
             t.push_surface(0.10);
         }

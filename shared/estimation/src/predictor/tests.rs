@@ -155,8 +155,10 @@ fn a_fix_resets_and_the_advisory_follows_the_threshold() {
 
 #[test]
 fn the_covariance_round_trips_and_bad_ones_are_refused() {
-    let mut p = PredictorParams::default();
-    p.unaided_velocity_walk_m_s_rt_s = 0.1;
+    let p = PredictorParams {
+        unaided_velocity_walk_m_s_rt_s: 0.1,
+        ..Default::default()
+    };
     let mut e = predictor(p);
     straight(&mut e, 1.3, 0.7, 50.0, false);
     let c = e.covariance();
@@ -174,8 +176,10 @@ fn the_covariance_round_trips_and_bad_ones_are_refused() {
 
 #[test]
 fn bad_parameters_are_refused_by_name() {
-    let mut p = PredictorParams::default();
-    p.surfacing_threshold_m = 0.0;
+    let p = PredictorParams {
+        surfacing_threshold_m: 0.0,
+        ..Default::default()
+    };
     assert!(matches!(
         p.check(),
         Err(PredictorParamsError::OutOfRange {
@@ -183,8 +187,10 @@ fn bad_parameters_are_refused_by_name() {
             ..
         })
     ));
-    let mut p = PredictorParams::default();
-    p.unaided_velocity_walk_m_s_rt_s = f64::NAN;
+    let p = PredictorParams {
+        unaided_velocity_walk_m_s_rt_s: f64::NAN,
+        ..Default::default()
+    };
     assert!(p.check().is_err());
     let p: PredictorParams = toml::from_str("form = \"eq14\"").expect("valid");
     assert_eq!(p.form, Form::Eq14);

@@ -52,7 +52,7 @@ fn rms(v: impl Iterator<Item = f64>) -> f64 {
 }
 
 const SITE: Site = Site {
-    lat_rad: 0.6736970912698112, // 38.6°
+    lat_rad: 0.6736970912698112,   // 38.6°
     lon_rad: -0.16231562043547265, // −9.3°
     declination_rad: 0.0,
 };
@@ -139,8 +139,16 @@ fn eq1_and_eq4_on_a_synthetic_straight_leg() {
     let (n, e) = (d * psi.cos(), d * psi.sin());
     let lat = SITE.lat_rad + n / meridian_radius(SITE.lat_rad);
     let lon = SITE.lon_rad + e / (transverse_radius(SITE.lat_rad) * SITE.lat_rad.cos());
-    assert!((last.lat_rad - lat).abs() < 1e-12, "{} vs {lat}", last.lat_rad);
-    assert!((last.lon_rad - lon).abs() < 1e-12, "{} vs {lon}", last.lon_rad);
+    assert!(
+        (last.lat_rad - lat).abs() < 1e-12,
+        "{} vs {lat}",
+        last.lat_rad
+    );
+    assert!(
+        (last.lon_rad - lon).abs() < 1e-12,
+        "{} vs {lon}",
+        last.lon_rad
+    );
     let v = last.vel_ned_m_s;
     assert!((v.x() - 1.5 * psi.cos()).abs() < 1e-12 && (v.y() - 1.5 * psi.sin()).abs() < 1e-12);
     assert_eq!(
@@ -202,7 +210,7 @@ fn eq1_and_eq4_on_a_noise_free_straight_leg() {
 #[test]
 fn predicted_drift_is_within_30_percent_of_the_realised_errors() {
     let params = DrParams::default();
-    for (m, default_seeds) in [(1u8, 20), (2, 8), (3, 4)] {
+    for (m, default_seeds) in [(1u8, 20), (2, 20), (3, 20)] {
         let seeds = seeds(default_seeds);
         let ends = per_seed(&seeds, |s| dive(m, s, &params));
         let realised = rms(ends.iter().map(|e| e.error_m()));
@@ -232,7 +240,7 @@ fn predicted_drift_is_within_30_percent_of_the_realised_errors() {
 /// is at most 10 % of the shift without it.
 #[test]
 fn the_spike_filter_removes_the_spikes_displacement() {
-    let seeds = seeds(4);
+    let seeds = seeds(20);
     let shifts = per_seed(&seeds, |s| spike_shift(2, s));
     let filtered = rms(shifts.iter().map(|s| s.0));
     let unfiltered = rms(shifts.iter().map(|s| s.1));
@@ -243,6 +251,12 @@ fn the_spike_filter_removes_the_spikes_displacement() {
         seeds.len(),
         filtered / unfiltered
     );
+    for (s, x) in seeds.iter().zip(&shifts) {
+        eprintln!(
+            "  seed {s}: {} spikes, shift {:.3} m filtered, {:.3} m unfiltered",
+            x.2, x.0, x.1
+        );
+    }
     assert!(spikes > 50 * seeds.len() as u64, "{spikes}");
     assert!(unfiltered > 0.5, "{unfiltered}");
     assert!(filtered <= 0.1 * unfiltered, "{filtered} vs {unfiltered}");
@@ -280,7 +294,12 @@ fn same_inputs_same_outputs_and_a_restored_snapshot_continues_bit_for_bit() {
     let mut again = DeadReckoning::new(&params, site).expect("valid");
     let out_again = feed(&mut again, &all);
     assert_eq!(out_a.len(), out_again.len());
-    assert!(out_a.iter().zip(&out_again).all(|(x, y)| bits(x) == bits(y)));
+    assert!(
+        out_a
+            .iter()
+            .zip(&out_again)
+            .all(|(x, y)| bits(x) == bits(y))
+    );
     assert!(out_a.len() > 6000, "{}", out_a.len());
 
     // Snapshot in the middle of the dive, at a stamp boundary.
@@ -429,7 +448,11 @@ fn without_dvl_lock_or_ahrs_it_publishes_on_with_an_honest_aiding_mode() {
             .unwrap_or_else(|| panic!("an output at {t_s} s"))
     };
     assert_eq!(at(20.0).aiding_mode, aiding::DVL | aiding::HEADING);
-    assert_eq!(at(35.0).aiding_mode, aiding::HEADING, "no lock since 29.8 s");
+    assert_eq!(
+        at(35.0).aiding_mode,
+        aiding::HEADING,
+        "no lock since 29.8 s"
+    );
     // After the AHRS stops (40 s), one output per DVL sample.
     assert_eq!(at(50.0).aiding_mode, 0);
     assert!(out.iter().any(|n| n.stamp_ns == stamp(59.8)));

@@ -172,8 +172,9 @@ impl DeadReckoning {
     /// `R_b^n(Θ) v_b` (zero before the first attitude).
     fn v_ned_now(&self) -> [f64; 3] {
         self.nav.euler_rad.map_or([0.0; 3], |e| {
-            (Rotation::from_euler(e[0], e[1], e[2]) * Vector::<Frd>::from_array(self.nav.v_body_m_s))
-                .to_array()
+            (Rotation::from_euler(e[0], e[1], e[2])
+                * Vector::<Frd>::from_array(self.nav.v_body_m_s))
+            .to_array()
         })
     }
 
@@ -359,7 +360,8 @@ impl DeadReckoning {
     /// The solution at `t` (after the step to `t`).
     fn output(&self, t: u64) -> Nav {
         let n = &self.nav;
-        let (lat, lon) = flat::to_geodetic(n.origin_rad[0], n.origin_rad[1], n.p_ned_m[0], n.p_ned_m[1]);
+        let (lat, lon) =
+            flat::to_geodetic(n.origin_rad[0], n.origin_rad[1], n.p_ned_m[0], n.p_ned_m[1]);
         let mut mode = 0;
         for (bit, last) in [
             (aiding::DVL, n.last_dvl_aid_ns),

@@ -128,11 +128,39 @@ impl DrParams {
             });
         }
         let day = 86_400.0;
-        let max_span = in_range("max_prediction_s", self.max_prediction_s, 0.0, 60.0, false, "[0, 60]")?;
-        let timeout = in_range("aiding_timeout_s", self.aiding_timeout_s, 0.0, day, true, "(0, 86400]")?;
-        let max_speed = in_range("max_speed_m_s", self.max_speed_m_s, 0.0, 100.0, true, "(0, 100]")?;
+        let max_span = in_range(
+            "max_prediction_s",
+            self.max_prediction_s,
+            0.0,
+            60.0,
+            false,
+            "[0, 60]",
+        )?;
+        let timeout = in_range(
+            "aiding_timeout_s",
+            self.aiding_timeout_s,
+            0.0,
+            day,
+            true,
+            "(0, 86400]",
+        )?;
+        let max_speed = in_range(
+            "max_speed_m_s",
+            self.max_speed_m_s,
+            0.0,
+            100.0,
+            true,
+            "(0, 100]",
+        )?;
         let initial = positive("initial_position_std_m", self.initial_position_std_m)?;
-        let window = in_range("surface_window_s", self.surface_window_s, 0.0, day, false, "[0, 86400]")?;
+        let window = in_range(
+            "surface_window_s",
+            self.surface_window_s,
+            0.0,
+            day,
+            false,
+            "[0, 86400]",
+        )?;
         let vz = in_range(
             "tare_max_vertical_speed_m_s",
             self.tare_max_vertical_speed_m_s,

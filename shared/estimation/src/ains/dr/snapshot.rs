@@ -111,6 +111,9 @@ impl DrSnapshot {
             finite("spike.v_ned_pred_m_s", v)?;
         }
         finite("spike.span_s", &[self.spike.span_s])?;
+        if let Some(v) = &self.spike.v_body_held_m_s {
+            finite("spike.v_body_held_m_s", v)?;
+        }
         let t = &self.tare;
         finite("tare", &[t.offset_m, t.session_mean_m])?;
         if self.spike.span_s < 0.0 {

@@ -20,9 +20,13 @@
 //! with `g_l = (0, 0, γ(L, h))` the normal gravity (plumb-bob gravity,
 //! eq. 5's `g − Ω × (Ω × r)`) and the Coriolis term `−2 Ω × v_n` left out,
 //! as the paper does (2·10⁻⁴ m/s² at 1.5 m/s). `Θ` is the attitude held
-//! from the last AHRS sample. The prediction is kept for at most
-//! `max_span_s` (an accelerometer bias of 0.03 m/s² is 0.06 m/s after 2 s);
-//! past it, the next DVL sample is taken as it is.
+//! from the last AHRS sample. The integration lasts at most `max_span_s`
+//! (an accelerometer bias of 0.03 m/s² is 0.06 m/s after 2 s); past it (a
+//! long DVL dropout) the prediction is the last predicted body velocity,
+//! held (our addition: without it the first sample after a long dropout
+//! cannot be judged, and a spike there was taken as the new reference and
+//! made the next good samples look like spikes). Only before the first
+//! DVL sample is there no prediction.
 
 use nalgebra::Vector3;
 
@@ -36,6 +40,9 @@ pub struct SpikeState {
     pub v_ned_pred_m_s: Option<[f64; 3]>,
     /// Time integrated since the last accepted sample, s.
     pub span_s: f64,
+    /// Past `max_span_s`: the body velocity held as the prediction, FRD,
+    /// m/s (the integration has stopped).
+    pub v_body_held_m_s: Option<[f64; 3]>,
     /// Consecutive rejections so far.
     pub rejections: u32,
 }
@@ -90,6 +97,9 @@ impl SpikeFilter {
     /// `dt_s`, at the attitude `euler` (roll, pitch, true yaw, rad), with
     /// normal gravity `gravity_m_s2`.
     pub fn on_imu(&mut self, f_b: [f64; 3], dt_s: f64, euler: [f64; 3], gravity_m_s2: f64) {
+        if self.state.v_body_held_m_s.is_some() {
+            return;
+        }
         let Some(v) = &mut self.state.v_ned_pred_m_s else {
             return;
         };
@@ -100,15 +110,18 @@ impl SpikeFilter {
         }
         self.state.span_s += dt_s;
         if self.state.span_s > self.config.max_span_s {
-            self.forget();
+            self.state.v_body_held_m_s = self.predicted_body(euler);
         }
     }
 
     /// The prediction in the body frame at `euler`, `v̂_b`, if there is one.
     pub fn predicted_body(&self, euler: [f64; 3]) -> Option<[f64; 3]> {
-        self.state.v_ned_pred_m_s.map(|v| {
-            (rotation(euler).inverse() * Vector::<Ned>::from_array(v)).to_array()
-        })
+        if let Some(v) = self.state.v_body_held_m_s {
+            return Some(v);
+        }
+        self.state
+            .v_ned_pred_m_s
+            .map(|v| (rotation(euler).inverse() * Vector::<Ned>::from_array(v)).to_array())
     }
 
     /// Judges a DVL sample `v_b` (FRD, m/s) taken at `euler`.
@@ -134,6 +147,7 @@ impl SpikeFilter {
                         (rotation(euler) * Vector::<Frd>::from_array(v_b)).to_array(),
                     ),
                     span_s: 0.0,
+                    v_body_held_m_s: None,
                     rejections: 0,
                 };
             }
@@ -227,7 +241,10 @@ mod tests {
         f.on_dvl([1.0, 0.0, 0.0], e);
         for _ in 0..2 {
             imu(&mut f, 20, 0.0, e);
-            assert!(matches!(f.on_dvl([2.0, 0.0, 0.0], e), Decision::Rejected(_)));
+            assert!(matches!(
+                f.on_dvl([2.0, 0.0, 0.0], e),
+                Decision::Rejected(_)
+            ));
         }
         imu(&mut f, 20, 0.0, e);
         assert_eq!(f.on_dvl([2.0, 0.0, 0.0], e), Decision::TrustedAgain);
@@ -236,13 +253,24 @@ mod tests {
     }
 
     #[test]
-    fn an_old_prediction_is_dropped_and_off_accepts_everything() {
-        let e = [0.0; 3];
+    fn past_the_longest_integration_the_body_velocity_is_held_and_off_accepts_everything() {
         let mut f = filter(5);
-        f.on_dvl([1.0, 0.0, 0.0], e);
-        imu(&mut f, 250, 0.0, e);
-        assert_eq!(f.predicted_body(e), None);
-        assert_eq!(f.on_dvl([3.0, 0.0, 0.0], e), Decision::Accepted);
+        assert_eq!(f.predicted_body([0.0; 3]), None);
+        f.on_dvl([1.0, 0.0, 0.0], [0.0; 3]);
+        // Accelerating at 0.1 m/s² for 3 s: the integration stops at 2 s.
+        imu(&mut f, 300, 0.1, [0.0; 3]);
+        let held = f.predicted_body([0.0, 0.0, 2.0]).expect("held");
+        assert!(
+            (held[0] - 1.2).abs() < 0.002 && held[1].abs() < 1e-12,
+            "{held:?}"
+        );
+        // A spike after the long gap is still caught.
+        assert!(matches!(
+            f.on_dvl([3.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
+            Decision::Rejected(_)
+        ));
+        let e = [0.0; 3];
+        assert_eq!(f.on_dvl([1.25, 0.0, 0.0], e), Decision::Accepted);
         let mut off = SpikeFilter::new(SpikeConfig {
             enabled: false,
             ..f.config
