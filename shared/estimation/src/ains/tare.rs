@@ -7,16 +7,20 @@
 //! `dr`: a GPS fix within the last second or so, the antenna out of the
 //! water, and no vertical motion) and hands those readings to
 //! [`DepthTare::push_surface`]; a reading taken below the surface ends the
-//! surface session ([`DepthTare::end_session`]). Each session's mean
-//! replaces the offset once it holds `min_samples` readings, so a new
-//! surfacing re-tares the gauge; until the first session the offset is 0.
+//! surface session ([`DepthTare::end_session`]). A session averages its
+//! readings, the first `n` equally, then each new one with weight `1/n` (a
+//! moving average of about `n` readings, so that the readings of the last
+//! decimetres of a slow ascent are forgotten once the vehicle floats); the
+//! average becomes the offset once the session holds `n` readings, so a
+//! new surfacing re-tares the gauge. Until the first session the offset
+//! is 0.
 
 /// The tare's state, plain (for a snapshot).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct TareState {
     /// The offset in use `d₀`, m.
     pub offset_m: f64,
-    /// Mean of the current surface session's readings, m.
+    /// Average of the current surface session's readings, m.
     pub session_mean_m: f64,
     /// Readings in the current surface session (0: submerged).
     pub session_count: u64,
@@ -25,16 +29,15 @@ pub struct TareState {
 /// The depth gauge's tare (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DepthTare {
-    min_samples: u64,
+    samples: u64,
     state: TareState,
 }
 
 impl DepthTare {
-    /// A tare whose session mean becomes the offset after `min_samples`
-    /// readings (at least 1).
-    pub fn new(min_samples: u64) -> Self {
+    /// A tare averaging about `samples` readings (at least 1).
+    pub fn new(samples: u64) -> Self {
         Self {
-            min_samples: min_samples.max(1),
+            samples: samples.max(1),
             state: TareState::default(),
         }
     }
@@ -42,9 +45,10 @@ impl DepthTare {
     /// A raw reading taken at the surface (true depth zero), m.
     pub fn push_surface(&mut self, raw_m: f64) {
         let s = &mut self.state;
-        s.session_count += 1;
-        s.session_mean_m += (raw_m - s.session_mean_m) / s.session_count as f64;
-        if s.session_count >= self.min_samples {
+        s.session_count = s.session_count.saturating_add(1);
+        let weight = s.session_count.min(self.samples) as f64;
+        s.session_mean_m += (raw_m - s.session_mean_m) / weight;
+        if s.session_count >= self.samples {
             s.offset_m = s.session_mean_m;
         }
     }
@@ -99,5 +103,8 @@ mod tests {
             t.push_surface(0.10);
         }
         assert!((t.offset_m() - 0.10).abs() < 1e-15);
+        // Later readings move the average with weight 1/3.
+        t.push_surface(0.13);
+        assert!((t.offset_m() - 0.11).abs() < 1e-15);
     }
 }

@@ -220,9 +220,9 @@ impl Tracked {
     }
 }
 
-/// Runs manoeuvre `m` with seed `seed` through a `dr` of `params` with the
-/// scenario's sensors; the dive's end.
-pub fn dive(m: u8, seed: u64, params: &DrParams) -> DiveEnd {
+/// Runs manoeuvre `m` with seed `seed` through one `dr` per entry of
+/// `params` with the scenario's sensors; each one's dive end.
+pub fn dive(m: u8, seed: u64, params: &[DrParams]) -> Vec<DiveEnd> {
     let scenario = ScenarioParams {
         imu_rate_hz: test_rate_hz(),
         ..dr_scenario(m)
@@ -235,7 +235,10 @@ pub fn dive(m: u8, seed: u64, params: &DrParams) -> DiveEnd {
         1e6,
     )
     .expect("valid scenario");
-    let mut t = Tracked::new(DeadReckoning::new(params, site(&g)).expect("valid"));
+    let mut runs: Vec<Tracked> = params
+        .iter()
+        .map(|p| Tracked::new(DeadReckoning::new(p, site(&g)).expect("valid")))
+        .collect();
     let origin = g.simulator().mission().origin();
     let mut buf = Vec::new();
     while let Some(s) = g.step() {
@@ -243,10 +246,14 @@ pub fn dive(m: u8, seed: u64, params: &DrParams) -> DiveEnd {
         buf.clear();
         inputs(&s, &mut buf);
         for i in &buf {
-            t.feed(i, &s, &origin);
+            for t in &mut runs {
+                t.feed(i, &s, &origin);
+            }
         }
     }
-    t.dive_end.expect("the run has a dive")
+    runs.iter()
+        .map(|t| t.dive_end.expect("the run has a dive"))
+        .collect()
 }
 
 /// The spike comparison on one seed of manoeuvre `m`: the same run without

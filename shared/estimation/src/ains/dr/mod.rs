@@ -138,7 +138,7 @@ impl DeadReckoning {
                 stats: DrStats::default(),
             },
             spike: SpikeFilter::new(config.spike),
-            tare: DepthTare::new(config.tare_min_samples),
+            tare: DepthTare::new(config.tare_samples),
             predictor: ErrorPredictor::new(config.predictor, config.initial_position_std_m),
             skip_until_ns: None,
         })

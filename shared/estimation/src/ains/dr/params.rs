@@ -45,9 +45,10 @@ pub struct DrParams {
     /// the readings of a dive that has started are left out. Default 0.05
     /// (our choice).
     pub tare_max_vertical_speed_m_s: f64,
-    /// Surface readings before a session's mean becomes the offset.
-    /// Default 10 (our choice: 1 s at 10 Hz).
-    pub tare_min_samples: u64,
+    /// Surface readings the tare averages (a session's average becomes the
+    /// offset once it holds this many; later ones move it with weight
+    /// 1/n). Default 20 (our choice: 2 s at 10 Hz).
+    pub tare_samples: u64,
     /// The error predictor (paper 002 eqs. 14-17) and the sensors'
     /// specification it is fed from.
     pub predictor: PredictorParams,
@@ -65,7 +66,7 @@ impl Default for DrParams {
             initial_position_std_m: 1000.0,
             surface_window_s: 1.5,
             tare_max_vertical_speed_m_s: 0.05,
-            tare_min_samples: 10,
+            tare_samples: 20,
             predictor: PredictorParams::default(),
         }
     }
@@ -108,7 +109,7 @@ pub struct DrConfig {
     pub(super) initial_position_std_m: f64,
     pub(super) surface_window_ns: u64,
     pub(super) tare_max_vertical_speed_m_s: f64,
-    pub(super) tare_min_samples: u64,
+    pub(super) tare_samples: u64,
     pub(super) predictor: PredictorConfig,
 }
 
@@ -169,10 +170,10 @@ impl DrParams {
             false,
             "[0, 10]",
         )?;
-        if !(1..=1_000_000).contains(&self.tare_min_samples) {
+        if !(1..=1_000_000).contains(&self.tare_samples) {
             return Err(DrParamsError::OutOfRange {
-                name: "tare_min_samples",
-                value: self.tare_min_samples as f64,
+                name: "tare_samples",
+                value: self.tare_samples as f64,
                 range: "[1, 1000000]",
             });
         }
@@ -188,7 +189,7 @@ impl DrParams {
             initial_position_std_m: initial,
             surface_window_ns: ns(window),
             tare_max_vertical_speed_m_s: vz,
-            tare_min_samples: self.tare_min_samples,
+            tare_samples: self.tare_samples,
             predictor: self.predictor.check()?,
         })
     }
@@ -228,10 +229,10 @@ mod tests {
             ),
             (
                 DrParams {
-                    tare_min_samples: 0,
+                    tare_samples: 0,
                     ..Default::default()
                 },
-                "tare_min_samples",
+                "tare_samples",
             ),
             (
                 DrParams {
