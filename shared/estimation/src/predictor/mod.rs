@@ -311,6 +311,14 @@ impl ErrorPredictor {
             .sqrt()
     }
 
+    /// The horizontal position error covariance (N, E), m².
+    pub fn horizontal_covariance(&self) -> [[f64; 2]; 2] {
+        [
+            [self.p[(P0, P0)], self.p[(P0, P0 + 1)]],
+            [self.p[(P0 + 1, P0)], self.p[(P0 + 1, P0 + 1)]],
+        ]
+    }
+
     /// The surfacing advisory: the prediction is above the threshold.
     pub fn surfacing_advised(&self) -> bool {
         self.horizontal_rms_m() > self.config.threshold_m

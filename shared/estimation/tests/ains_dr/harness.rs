@@ -5,7 +5,7 @@
 
 use nauta_estimation::Estimator;
 use nauta_estimation::ains::AinsInput;
-use nauta_estimation::ains::dr::{DeadReckoning, DrParams, Site};
+use nauta_estimation::ains::dr::{DeadReckoning, DrParams, DrStats, Site};
 use nauta_estimation::frames::Vector;
 use nauta_estimation::readings::{Ahrs, Depth, Dvl, Gps, Imu, Nav};
 use nauta_sim::mission::Origin;
@@ -162,6 +162,8 @@ pub struct DiveEnd {
     pub truth_ne_m: (f64, f64),
     /// Distance travelled since the last fix before the dive, m.
     pub distance_m: f64,
+    /// The estimator's counters at the end of the run.
+    pub stats: DrStats,
 }
 
 impl DiveEnd {
@@ -206,6 +208,7 @@ impl Tracked {
                     nav_ne_m: origin.to_local(nav.lat_rad, nav.lon_rad),
                     truth_ne_m: truth_ne,
                     distance_m: m.truth.distance_m - self.gps_distance_m,
+                    stats: DrStats::default(),
                 });
             }
             self.last_gps_ns = Some(g.stamp_ns);
@@ -252,7 +255,10 @@ pub fn dive(m: u8, seed: u64, params: &[DrParams]) -> Vec<DiveEnd> {
         }
     }
     runs.iter()
-        .map(|t| t.dive_end.expect("the run has a dive"))
+        .map(|t| DiveEnd {
+            stats: t.dr.stats(),
+            ..t.dive_end.expect("the run has a dive")
+        })
         .collect()
 }
 

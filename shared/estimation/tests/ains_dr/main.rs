@@ -251,6 +251,12 @@ fn predicted_drift_is_within_30_percent_of_the_realised_errors() {
             pct(predicted(3)),
             pct(predicted(4)),
         );
+        let gated: u64 = ends.iter().map(|e| e[0].stats.gps_gated).sum();
+        let fixes: u64 = ends.iter().map(|e| e[0].stats.gps_fixes).sum();
+        let spikes: u64 = ends.iter().map(|e| e[0].stats.spikes_rejected).sum();
+        eprintln!(
+            "  {fixes} GPS fixes taken, {gated} gated; {spikes} DVL samples rejected as spikes"
+        );
         for (s, e) in seeds.iter().zip(&ends) {
             eprintln!(
                 "  seed {s}: error {:.2} m, predicted {:.2} m",
@@ -463,6 +469,45 @@ fn bad_input_is_refused_and_the_state_kept() {
     // And it goes on.
     dr.on_input(&ahrs(0.3, 10.0), &mut out).expect("valid");
     assert_eq!(out.len(), 1);
+}
+
+/// A GPS fix 500 m off the dead-reckoned position (σ 2.5 m, a few metres
+/// predicted) is gated and counted, the position kept; after the largest
+/// number of gated fixes in a row the next one re-anchors the position.
+#[test]
+fn an_outlying_gps_fix_is_gated_but_cannot_lock_the_gps_out() {
+    let mut dr = DeadReckoning::new(&DrParams::default(), SITE).expect("valid");
+    let mut inputs = vec![gps(0.0, SITE.lat_rad, SITE.lon_rad)];
+    let off = 500.0 / meridian_radius(SITE.lat_rad);
+    for k in 1..=100 {
+        let t = k as f64 * 0.1;
+        inputs.push(dvl(t, [1.0, 0.0, 0.0]));
+        if k % 10 == 0 {
+            inputs.push(gps(t, SITE.lat_rad + off, SITE.lon_rad));
+        }
+        inputs.push(ahrs(t, 0.0));
+    }
+    let out = feed(&mut dr, &inputs);
+    let s = dr.stats();
+    // Fixes: the first, the re-anchoring one at 6 s and the four after it.
+    assert_eq!(
+        (s.gps_gated, s.gps_reanchored, s.gps_fixes),
+        (5, 1, 6),
+        "{s:?}"
+    );
+    let north = |t_s: f64| {
+        let n = out
+            .iter()
+            .rfind(|n| n.stamp_ns == stamp(t_s))
+            .expect("an output");
+        (n.lat_rad - SITE.lat_rad) * meridian_radius(SITE.lat_rad)
+    };
+    // Gated: the dead reckoning goes on (about 1 m/s north).
+    assert!((north(5.0) - 5.0).abs() < 0.5, "{}", north(5.0));
+    // The sixth outlying fix (at 6 s) re-anchors.
+    assert!((north(6.0) - 500.0).abs() < 1e-6, "{}", north(6.0));
+    // An honest fix within its σ is never gated.
+    assert_eq!(dr.stats().gps_gated, 5);
 }
 
 /// A DVL that never locks and an AHRS that stops: the estimator keeps

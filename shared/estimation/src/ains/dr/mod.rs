@@ -18,7 +18,10 @@
 //!   manoeuvre at the surface), so the flat form's error (0.07 m at 1 km,
 //!   7 m at 10 km from the origin) restarts at every surfacing.
 //! - GPS at the surface resets the horizontal position to the fix (and the
-//!   predictor's horizontal error to the fix's σ).
+//!   predictor's horizontal error to the fix's σ), if it passes a
+//!   normalised-innovation gate against the predicted covariance; after
+//!   `gps_gate_max_rejections` gated fixes in a row the next one resets the
+//!   position anyway (counted in [`DrStats`]).
 //! - Depth from the gauge, its offset tared at the surface
 //!   ([`crate::ains::tare`]): a reading is a surface reading when a GPS fix
 //!   came within `surface_window_s` and the vertical velocity is below
@@ -348,7 +351,33 @@ impl DeadReckoning {
         self.nav.last_depth_ns = Some(t);
     }
 
+    /// The fix's normalised innovation `νᵀ (P_h + σ² I)⁻¹ ν`.
+    fn gps_innovation(&self, g: &Gps) -> f64 {
+        let n = &self.nav;
+        let (fn_, fe) = flat::to_local(n.origin_rad[0], n.origin_rad[1], g.lat_rad, g.lon_rad);
+        let (vn, ve) = (fn_ - n.p_ned_m[0], fe - n.p_ned_m[1]);
+        let p = self.predictor.horizontal_covariance();
+        let r = g.horizontal_std_m * g.horizontal_std_m;
+        let (a, b, d) = (p[0][0] + r, p[0][1], p[1][1] + r);
+        let det = a * d - b * b;
+        if !(det > 0.0) {
+            return 0.0;
+        }
+        (d * vn * vn - 2.0 * b * vn * ve + a * ve * ve) / det
+    }
+
     fn on_gps(&mut self, g: &Gps, t: u64) {
+        let gate = self.config.gps_gate_chi2;
+        if gate > 0.0 && self.gps_innovation(g) > gate {
+            let s = &mut self.nav.stats;
+            if s.gps_gated_in_a_row < self.config.gps_gate_max_rejections {
+                s.gps_gated += 1;
+                s.gps_gated_in_a_row += 1;
+                return;
+            }
+            s.gps_reanchored += 1;
+        }
+        self.nav.stats.gps_gated_in_a_row = 0;
         self.nav.origin_rad = [g.lat_rad, g.lon_rad];
         self.nav.p_ned_m[0] = 0.0;
         self.nav.p_ned_m[1] = 0.0;

@@ -49,6 +49,16 @@ pub struct DrParams {
     /// offset once it holds this many; later ones move it with weight
     /// 1/n). Default 20 (our choice: 2 s at 10 Hz).
     pub tare_samples: u64,
+    /// Normalised-innovation gate of a GPS fix: the fix resets the position
+    /// only if `νᵀ (P_h + σ² I)⁻¹ ν` is at most this, ν the fix's offset
+    /// from the dead-reckoned position, `P_h` the predictor's horizontal
+    /// covariance, σ the fix's. Default 13.8 (our choice: χ² with 2 degrees
+    /// of freedom at 99.9 %); 0 turns the gate off.
+    pub gps_gate_chi2: f64,
+    /// After this many consecutive gated fixes the next one resets the
+    /// position anyway (the gate cannot lock the GPS out). Default 5 (our
+    /// choice: 5 s at 1 Hz).
+    pub gps_gate_max_rejections: u32,
     /// The error predictor (paper 002 eqs. 14-17) and the sensors'
     /// specification it is fed from.
     pub predictor: PredictorParams,
@@ -67,6 +77,8 @@ impl Default for DrParams {
             surface_window_s: 1.5,
             tare_max_vertical_speed_m_s: 0.05,
             tare_samples: 20,
+            gps_gate_chi2: 13.8,
+            gps_gate_max_rejections: 5,
             predictor: PredictorParams::default(),
         }
     }
@@ -110,6 +122,8 @@ pub struct DrConfig {
     pub(super) surface_window_ns: u64,
     pub(super) tare_max_vertical_speed_m_s: f64,
     pub(super) tare_samples: u64,
+    pub(super) gps_gate_chi2: f64,
+    pub(super) gps_gate_max_rejections: u32,
     pub(super) predictor: PredictorConfig,
 }
 
@@ -177,6 +191,21 @@ impl DrParams {
                 range: "[1, 1000000]",
             });
         }
+        let gate = in_range(
+            "gps_gate_chi2",
+            self.gps_gate_chi2,
+            0.0,
+            1e6,
+            false,
+            "[0, 1e6]",
+        )?;
+        if self.gps_gate_max_rejections > 1_000_000 {
+            return Err(DrParamsError::OutOfRange {
+                name: "gps_gate_max_rejections",
+                value: self.gps_gate_max_rejections as f64,
+                range: "[0, 1000000]",
+            });
+        }
         Ok(DrConfig {
             spike: SpikeConfig {
                 enabled: self.spike_filter,
@@ -190,6 +219,8 @@ impl DrParams {
             surface_window_ns: ns(window),
             tare_max_vertical_speed_m_s: vz,
             tare_samples: self.tare_samples,
+            gps_gate_chi2: gate,
+            gps_gate_max_rejections: self.gps_gate_max_rejections,
             predictor: self.predictor.check()?,
         })
     }

@@ -19,6 +19,13 @@ pub struct DrStats {
     pub dvl_no_lock: u64,
     /// GPS fixes that reset the position.
     pub gps_fixes: u64,
+    /// GPS fixes refused by the normalised-innovation gate.
+    pub gps_gated: u64,
+    /// GPS fixes taken after the largest number of consecutive gated ones
+    /// (re-anchored).
+    pub gps_reanchored: u64,
+    /// Consecutive gated fixes so far.
+    pub gps_gated_in_a_row: u32,
 }
 
 /// The navigation state proper.
