@@ -223,12 +223,26 @@ fn predicted_drift_is_within_30_percent_of_the_realised_errors() {
         ..Default::default()
     };
     let sim = SensorErrorSpec::simulator();
+    // The error budget: each source alone (the GPS fix's σ is in every one).
+    let mut none = sim;
+    none.dvl.noise_sigma_m_s = 0.0;
+    none.dvl.scale_factor_sigma = 0.0;
+    none.ahrs.roll_pitch_sigma_deg = 0.0;
+    none.ahrs.heading_sigma_deg = 0.0;
+    none.ahrs.heading_bias_sigma_deg = 0.0;
+    let mut heading_bias = none;
+    heading_bias.ahrs.heading_bias_sigma_deg = sim.ahrs.heading_bias_sigma_deg;
+    let mut scale = none;
+    scale.dvl.scale_factor_sigma = sim.dvl.scale_factor_sigma;
     let params = [
         with(Form::Eq17, sim),
         with(Form::Eq14, sim),
         with(Form::Eq15, sim),
         with(Form::Eq16, sim),
         with(Form::Eq17, SensorErrorSpec::paper_002()),
+        with(Form::Eq17, none),
+        with(Form::Eq17, heading_bias),
+        with(Form::Eq17, scale),
     ];
     for m in [1u8, 2, 3] {
         let seeds = seeds(20);
@@ -250,6 +264,23 @@ fn predicted_drift_is_within_30_percent_of_the_realised_errors() {
             pct(predicted(2)),
             pct(predicted(3)),
             pct(predicted(4)),
+        );
+        // Shares of the predicted variance at the dive's end (seed means).
+        let var = |k: usize| {
+            ends.iter()
+                .map(|e| e[k].nav.predicted_drift_m.powi(2))
+                .sum::<f64>()
+                / ends.len() as f64
+        };
+        let (total, gps) = (var(0), var(5));
+        let share = |x: f64| 100.0 * x / total;
+        eprintln!(
+            "  predicted variance: GPS fix {:.0} %, AHRS heading bias {:.0} %, DVL scale factor \
+             {:.0} %, the rest (white noise, roll and pitch, outages) {:.0} %",
+            share(gps),
+            share(var(6) - gps),
+            share(var(7) - gps),
+            share(total + 2.0 * gps - var(6) - var(7) - gps),
         );
         let gated: u64 = ends.iter().map(|e| e[0].stats.gps_gated).sum();
         let fixes: u64 = ends.iter().map(|e| e[0].stats.gps_fixes).sum();
