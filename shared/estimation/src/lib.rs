@@ -9,7 +9,8 @@
 //! - [`earth`]: WGS84 constants, radii of curvature, gravity, Earth and transport
 //!   rates, geodetic ↔ ECEF.
 //! - [`ains`]: the aided INS role's inputs and the aiding-mode bits of its
-//!   output (`ains/nav`).
+//!   output (`ains/nav`), the depth gauge's surface tare, and the `dr`
+//!   variant (paper 002's dead reckoning with its DVL spike filter).
 //! - [`attitude`]: quaternion and Euler conventions, rotation vectors, the exact
 //!   attitude update and its sensor-side inverse, attitude error metrics.
 //! - [`attitude_core`]: the attitude role's estimator (alignment, then the
@@ -29,6 +30,9 @@
 //!   aided by gravity and magnetic heading.
 //! - [`pf`]: paper 000's attitude particle filter, with gyro bias estimation,
 //!   disturbance rejection and initialisation from the first samples.
+//! - [`predictor`]: paper 002's error predictor (eqs. 14-17) as the
+//!   covariance of the sensors' errors along the track: `predicted_drift_m`
+//!   and the surfacing advisory.
 //! - [`readings`]: the checked domain values sensors and estimators report
 //!   (built from wire messages by `nauta_messages::checked`).
 //! - [`strapdown`]: free strapdown inertial navigation on the WGS84 ellipsoid.
@@ -51,6 +55,7 @@ pub mod local;
 pub mod mekf;
 pub mod params;
 pub mod pf;
+pub mod predictor;
 pub mod readings;
 pub mod role;
 pub mod strapdown;

@@ -3,6 +3,13 @@
 //! `dr`, paper 002; `ekf`, an error-state Kalman filter) live in their own
 //! modules and implement [`crate::Estimator`] with [`AinsInput`] in and
 //! [`crate::readings::Nav`] out (`ains/nav`).
+//!
+//! - [`dr`]: paper 002's dead reckoning with its spike filter and error
+//!   predictor.
+//! - [`tare`]: the depth gauge's offset, tared at the surface (every variant).
+
+pub mod dr;
+pub mod tare;
 
 use crate::readings::{Ahrs, Attitude, Depth, Dvl, Fix, Gps, Imu, Nav};
 use crate::role::Stamped;
