@@ -768,12 +768,12 @@ pub fn process_gone(pid: u32) -> bool {
     }
 }
 
-/// `nauta swap attitude VARIANT`, asked again while it is refused (a
+/// `nauta swap PROCESS VARIANT`, asked again while it is refused (a
 /// previous swap or a restart still starting, no snapshot yet).
-pub fn swap_when_accepted(wd: &Watchdog, ns: &Namespace, variant: &str) {
+pub fn swap_when_accepted(wd: &Watchdog, ns: &Namespace, process: &str, variant: &str) {
     let mut tries = 0;
     loop {
-        let (code, _, err) = nauta_cli(&["swap", "attitude", variant, "--namespace", ns.as_str()]);
+        let (code, _, err) = nauta_cli(&["swap", process, variant, "--namespace", ns.as_str()]);
         if code == Some(0) {
             return;
         }

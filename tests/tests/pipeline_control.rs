@@ -131,7 +131,7 @@ fn the_shipped_survey_restarts_a_killed_estimator_and_status_counts_restarts_and
     });
     assert!(restarted_once, "status: {:?}", status_of(&ns, "attitude"));
 
-    swap_when_accepted(&wd, &ns, "gyro");
+    swap_when_accepted(&wd, &ns, "attitude", "gyro");
     let swapped = wait_until(&wd, Duration::from_secs(60), || {
         running(&ns).is_some_and(|a| a["swaps"] == 1 && a["variant"] == "gyro")
     });

@@ -296,7 +296,7 @@ fn swap_to_another_variant_and_back_is_seamless() {
     // 1.72° against a 3σ of 1.70°; in the cruise it stays well inside.
     follow_until(&wd, &mut launch, &mut follower, 0, 20_000_000_000);
     for (variant, instance) in [("gyro", 1u32), ("mekf", 2)] {
-        swap_when_accepted(&wd, &ns, variant);
+        swap_when_accepted(&wd, &ns, "attitude", variant);
         let resumed_from = follower.samples.last().map_or(0, |s| s.stamp_ns);
         follow_until(
             &wd,

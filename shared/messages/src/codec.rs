@@ -37,7 +37,9 @@ pub enum DecodeError {
     },
 }
 
-fn config() -> impl bincode::config::Config {
+/// The bincode configuration of every encoding nauta writes (wire messages,
+/// and the opaque estimator states inside snapshots).
+pub fn config() -> impl bincode::config::Config {
     bincode::config::standard()
         .with_fixed_int_encoding()
         .with_little_endian()

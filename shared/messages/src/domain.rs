@@ -4,9 +4,14 @@
 //! The header's `seq`, `source` and `instance` are the publisher's to fill in.
 
 use nauta_estimation::AttitudeStateSnapshot;
+use nauta_estimation::ains::AinsState;
 use nauta_estimation::attitude_core::AttitudeReport;
+use nauta_estimation::readings::Nav;
 
-use crate::{AttitudeEstimate, AttitudeSnapshot, Header, Role, calibration};
+use crate::{
+    AinsSnapshot, AttitudeEstimate, AttitudeSnapshot, Header, NavSolution, Role, calibration,
+    codec, fixed_str, to_fixed_str,
+};
 
 impl From<&AttitudeReport> for AttitudeEstimate {
     fn from(r: &AttitudeReport) -> Self {
@@ -52,5 +57,169 @@ impl AttitudeSnapshot {
             covariance: self.covariance,
             calibration: self.calibration,
         }
+    }
+}
+
+impl From<&Nav> for NavSolution {
+    fn from(n: &Nav) -> Self {
+        NavSolution {
+            header: Header::new(n.stamp_ns, 0, Role::Ains, 0),
+            lat_rad: n.lat_rad,
+            lon_rad: n.lon_rad,
+            depth_m: n.depth_m,
+            vel_ned_m_s: n.vel_ned_m_s.to_array(),
+            // The wire's zero quaternion: no attitude in this solution.
+            quat_nb: n.attitude.map_or([0.0; 4], |q| q.to_wxyz()),
+            pos_std_ned_m: n.pos_std_ned_m.to_array(),
+            vel_std_ned_m_s: n.vel_std_ned_m_s.to_array(),
+            predicted_drift_m: n.predicted_drift_m,
+            aiding_mode: n.aiding_mode,
+            pad: 0,
+        }
+    }
+}
+
+/// Bytes an [`AinsSnapshot`] holds of a variant's state.
+pub const AINS_STATE_BYTES: usize = 9 * 32 * 8;
+
+impl AinsSnapshot {
+    /// The snapshot message of `state`, after the input stamped `stamp_ns`.
+    /// A state that does not fit (it cannot: the test below bounds every
+    /// variant's) is sent empty, and refused by whoever restores it.
+    pub fn of_state(state: &AinsState, stamp_ns: u64) -> Self {
+        let bytes = match state {
+            AinsState::Dr(s) => bincode::serde::encode_to_vec(s.as_ref(), codec::config()),
+            AinsState::Unreadable { .. } => Ok(Vec::new()),
+        }
+        .ok()
+        .filter(|b| b.len() <= AINS_STATE_BYTES)
+        .unwrap_or_default();
+        let mut m = AinsSnapshot {
+            header: Header::new(stamp_ns, 0, Role::Ains, 0),
+            variant: to_fixed_str(state.variant()),
+            state_len: bytes.len() as u32,
+            pad: 0,
+            state: [[0; 32]; 9],
+        };
+        for (i, chunk) in bytes.chunks(8).enumerate() {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            m.state[i / 32][i % 32] = u64::from_le_bytes(word);
+        }
+        m
+    }
+
+    /// The variant's state this message carries (checked by the instance
+    /// that restores it; what does not decode is [`AinsState::Unreadable`]).
+    pub fn state(&self) -> AinsState {
+        let variant = fixed_str(&self.variant);
+        let unreadable = |reason: String| AinsState::Unreadable {
+            variant: variant.clone(),
+            reason,
+        };
+        let len = self.state_len as usize;
+        if len == 0 || len > AINS_STATE_BYTES {
+            return unreadable(format!("it holds {len} bytes of state"));
+        }
+        let bytes: Vec<u8> = self
+            .state
+            .iter()
+            .flatten()
+            .flat_map(|w| w.to_le_bytes())
+            .take(len)
+            .collect();
+        match variant.as_str() {
+            "dr" => match bincode::serde::decode_from_slice(&bytes, codec::config()) {
+                Ok((s, used)) if used == len => AinsState::Dr(Box::new(s)),
+                Ok((_, used)) => unreadable(format!("{} trailing bytes", len - used)),
+                Err(e) => unreadable(e.to_string()),
+            },
+            other => unreadable(format!("no variant {other:?}")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nauta_estimation::ains::dr::{DrParams, Site};
+    use nauta_estimation::ains::{AinsCore, AinsInput, AinsParams, AinsState};
+    use nauta_estimation::frames::Vector;
+    use nauta_estimation::readings::{Ahrs, Dvl, Gps};
+    use nauta_estimation::{Estimator, Stamped as _};
+
+    use super::*;
+
+    /// A `dr` that has run a while: every part of its state set.
+    fn running_dr() -> AinsCore {
+        let site = Site {
+            lat_rad: 0.67,
+            lon_rad: -0.16,
+            declination_rad: -0.017,
+        };
+        let mut core = AinsCore::new(&AinsParams::Dr(DrParams::default()), site).expect("dr");
+        let mut out = Vec::new();
+        for k in 0..200u64 {
+            let t = k * 100_000_000;
+            let mut inputs = vec![AinsInput::Ahrs(Ahrs {
+                stamp_ns: t,
+                roll_rad: 0.01,
+                pitch_rad: -0.02,
+                heading_mag_rad: 1.0,
+            })];
+            if k % 2 == 0 {
+                inputs.push(AinsInput::Dvl(Dvl {
+                    stamp_ns: t,
+                    velocity_body_m_s: Vector::new(1.5, 0.01, 0.0),
+                    altitude_m: 20.0,
+                    beams_valid: 0b1111,
+                    bottom_lock: true,
+                }));
+            }
+            if k < 20 {
+                inputs.push(AinsInput::Gps(Gps {
+                    stamp_ns: t,
+                    lat_rad: 0.67,
+                    lon_rad: -0.16,
+                    height_m: 0.0,
+                    horizontal_std_m: 2.0,
+                    quality: 1,
+                }));
+            }
+            inputs.sort_by_key(|i| i.stamp_ns());
+            for i in &inputs {
+                core.on_input(i, &mut out).expect("input");
+            }
+        }
+        core
+    }
+
+    #[test]
+    fn a_dr_state_fits_the_snapshot_message_and_comes_back_exactly() {
+        let core = running_dr();
+        let state = core.snapshot().expect("a state");
+        let m = AinsSnapshot::of_state(&state, 42);
+        assert!(m.state_len > 0, "the state did not fit");
+        assert!((m.state_len as usize) < AINS_STATE_BYTES);
+        assert_eq!(fixed_str(&m.variant), "dr");
+        // Through the wire encoding too.
+        let m: AinsSnapshot = codec::decode(&codec::encode(&m).expect("encode")).expect("decode");
+        assert_eq!(m.state(), state);
+    }
+
+    #[test]
+    fn a_damaged_or_foreign_snapshot_is_unreadable_and_refused() {
+        let state = running_dr().snapshot().expect("a state");
+        let mut m = AinsSnapshot::of_state(&state, 42);
+        m.state_len = 7;
+        let AinsState::Unreadable { variant, reason } = m.state() else {
+            panic!("a cut state decoded");
+        };
+        assert_eq!(variant, "dr");
+        assert!(!reason.is_empty());
+        let mut core = running_dr();
+        let e = core.restore(&m.state(), 42).expect_err("refused");
+        assert_eq!(e.kind, "snapshot-unreadable");
+        m.variant = to_fixed_str("pf");
+        assert!(matches!(m.state(), AinsState::Unreadable { .. }));
     }
 }

@@ -33,33 +33,26 @@ message! {
 }
 
 message! {
-    /// Aided-INS state: position, velocity, attitude, sensor biases and the 15×15
-    /// error covariance (position NED m, velocity NED m/s, attitude rad, accel bias
-    /// m/s², gyro bias rad/s).
-    #[wire(type_name = "nauta.AinsSnapshot.v1", size = 1968)]
+    /// Aided-INS state for a warm restart or a hot swap: the variant's exact
+    /// state, bincode-encoded (the codec's configuration) from its snapshot
+    /// type in `nauta_estimation::ains` (`dr`: `DrSnapshot`, the navigation
+    /// state, the spike filter, the depth tare and the error predictor's 13×13
+    /// covariance), so that another instance of the variant continues bit for
+    /// bit. Opaque on purpose: each variant's state differs, and only an
+    /// instance of that variant reads it, checking every value.
+    #[wire(type_name = "nauta.AinsSnapshot.v1", size = 2360)]
     pub struct AinsSnapshot {
-        /// Common header.
+        /// Common header; `stamp_ns` is the stamp of the last input processed.
         pub header: Header,
-        /// Latitude, rad.
-        pub lat_rad: f64,
-        /// Longitude, rad.
-        pub lon_rad: f64,
-        /// Depth, m.
-        pub depth_m: f64,
-        /// Velocity NED, m/s.
-        pub vel_ned_m_s: [f64; 3],
-        /// Attitude quaternion body → NED.
-        pub quat_nb: [f64; 4],
-        /// Accelerometer bias, FRD, m/s².
-        pub accel_bias_m_s2: [f64; 3],
-        /// Gyro bias, FRD, rad/s.
-        pub gyro_bias_rad_s: [f64; 3],
-        /// Error covariance, row-major 15×15.
-        pub covariance: [[f64; 15]; 15],
-        /// Aiding mode bits.
-        pub aiding_mode: u32,
+        /// The variant whose state this is (`dr`), NUL-padded.
+        pub variant: [u8; 16],
+        /// Bytes of `state` in use.
+        pub state_len: u32,
         /// Zero.
         pub pad: u32,
+        /// The variant's state: the first `state_len` bytes of these words,
+        /// each little-endian.
+        pub state: [[u64; 32]; 9],
     }
 }
 

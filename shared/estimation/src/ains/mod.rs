@@ -9,7 +9,10 @@
 //! - [`tare`]: the depth gauge's offset, tared at the surface (every variant).
 
 pub mod dr;
+pub mod role;
 pub mod tare;
+
+pub use role::{AinsCore, AinsParams, AinsState, VARIANTS};
 
 use crate::readings::{Ahrs, Attitude, Depth, Dvl, Fix, Gps, Imu, Nav};
 use crate::role::Stamped;

@@ -133,17 +133,21 @@ pub fn nav_of(o: &TrackOut) -> Option<NavSolution> {
         ..Default::default()
     })
 }
+/// The tracker's (x, p) in the ains snapshot message's opaque state words
+/// (the message is the one the test's `ains` role has).
 pub fn snapshot_of(s: &(f64, f64), stamp_ns: u64) -> AinsSnapshot {
     let mut m = AinsSnapshot {
         header: Header::new(stamp_ns, 0, Role::Ains, 0),
-        depth_m: s.0,
+        variant: nauta_messages::to_fixed_str("track"),
+        state_len: 16,
         ..Default::default()
     };
-    m.covariance[2][2] = s.1;
+    m.state[0][0] = s.0.to_bits();
+    m.state[0][1] = s.1.to_bits();
     m
 }
 pub fn state_of(m: &AinsSnapshot) -> (f64, f64) {
-    (m.depth_m, m.covariance[2][2])
+    (f64::from_bits(m.state[0][0]), f64::from_bits(m.state[0][1]))
 }
 
 /// The tracker aided by the sensor's position channel.

@@ -1,0 +1,64 @@
+//! `nauta-ains`: the aided INS role (DESIGN §2). Wiring only: the estimator is
+//! [`AinsCore`] (in `nauta-estimation`: the `dr` variant, paper 002's dead
+//! reckoning, so far), its lifecycle the runtime's estimator shell.
+//!
+//! Inputs in the order of [`AinsInput`] (ties at one stamp are taken in this
+//! order): IMU, DVL, depth, GPS, AHRS, all from the sensor. The AHRS and the
+//! DVL trigger outputs (`ains/nav`); the others only correct the state.
+//! `attitude/estimate` and `positioning/fix` join when the variants that use
+//! them do.
+
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use clap::Parser;
+use nauta_estimation::ains::dr::Site;
+use nauta_estimation::ains::{AinsCore, AinsInput, AinsParams, VARIANTS};
+use nauta_messages::{AinsSnapshot, NavSolution, Role};
+use nauta_runtime::process::ProcessArgs;
+use nauta_runtime::{Manifest, Shell, services};
+
+/// Navigates the vehicle: position and velocity from the aiding sensors.
+#[derive(Debug, Parser)]
+#[command(name = "nauta-ains", version, about)]
+struct Args {
+    #[command(flatten)]
+    process: ProcessArgs,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    Shell::<AinsCore>::new(Role::Ains, &VARIANTS)
+        .aiding(services::imu(), Role::Sensor, AinsInput::Imu)
+        .input(services::dvl(), Role::Sensor, AinsInput::Dvl)
+        .aiding(services::depth(), Role::Sensor, AinsInput::Depth)
+        .aiding(services::gps(), Role::Sensor, AinsInput::Gps)
+        .input(services::ahrs(), Role::Sensor, AinsInput::Ahrs)
+        .output(services::nav_solution(), |n| Some(NavSolution::from(n)))
+        .snapshot(
+            services::snapshot(Role::Ains),
+            AinsSnapshot::of_state,
+            AinsSnapshot::state,
+        )
+        .main(&args.process, core_for)
+}
+
+/// The core of `variant` with its parameters from the manifest and the
+/// site's position and declination.
+fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result<AinsCore> {
+    // `dr` is the only variant so far (VARIANTS); the shell refuses others.
+    let params = AinsParams::Dr(manifest.params(process, Some(variant))?);
+    let site = manifest.site.with_context(|| {
+        format!(
+            "{}: the manifest has no [site]: the aided INS needs the position and declination",
+            manifest.path.display()
+        )
+    })?;
+    let site = Site {
+        lat_rad: site.latitude_deg.to_radians(),
+        lon_rad: site.longitude_deg.to_radians(),
+        declination_rad: site.magnetic_declination_deg.to_radians(),
+    };
+    AinsCore::new(&params, site)
+        .with_context(|| format!("{}: process.{process}", manifest.path.display()))
+}
