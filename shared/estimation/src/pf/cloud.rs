@@ -98,21 +98,31 @@ impl Cloud {
     /// `θ_i = (ω̃ − b_i) Δt + η_i`, with `η` the three axes' draws one after
     /// the other (`3n` values). Not renormalised: `exp_series` is unit to
     /// `|θ|⁶/4608`, and [`Cloud::rotate_nav`] renormalises every 16 samples.
-    pub(super) fn propagate(&mut self, omega: [f64; 3], dt: f64, eta: &[f64]) {
+    pub(super) fn propagate<const NOISE: bool>(&mut self, omega: [f64; 3], dt: f64, eta: &[f64]) {
         let n = self.len();
-        let (ex, rest) = eta.split_at(n);
-        let (ey, ez) = rest.split_at(n);
-        let ez = &ez[..n];
+        let zeros = [0.0; 0];
+        let (ex, ey, ez) = if NOISE {
+            let (ex, rest) = eta.split_at(n);
+            let (ey, ez) = rest.split_at(n);
+            (ex, ey, &ez[..n])
+        } else {
+            (&zeros[..], &zeros[..], &zeros[..])
+        };
         let [qw, qx, qy, qz] = &mut self.q;
         let (qw, qx, qy, qz) = (&mut qw[..n], &mut qx[..n], &mut qy[..n], &mut qz[..n]);
         let [bx, by, bz] = &self.b;
         let (bx, by, bz) = (&bx[..n], &by[..n], &bz[..n]);
         for i in 0..n {
-            let theta = [
-                (omega[0] - bx[i]) * dt + ex[i],
-                (omega[1] - by[i]) * dt + ey[i],
-                (omega[2] - bz[i]) * dt + ez[i],
+            let mut theta = [
+                (omega[0] - bx[i]) * dt,
+                (omega[1] - by[i]) * dt,
+                (omega[2] - bz[i]) * dt,
             ];
+            if NOISE {
+                theta[0] += ex[i];
+                theta[1] += ey[i];
+                theta[2] += ez[i];
+            }
             let q = qmul(&[qw[i], qx[i], qy[i], qz[i]], &exp_series(theta));
             qw[i] = q[0];
             qx[i] = q[1];
@@ -179,33 +189,60 @@ impl Cloud {
     }
 }
 
-/// (P3) for every particle: its error `E_i = r ⊗ q_i⁻¹` into `e` (as
-/// [`Cloud::errors`]) and, with `a = q_acc ⊗ r⁻¹` and `m = q_mag ⊗ r⁻¹`,
-/// `q_acc ⊗ q_i⁻¹ = a ⊗ E_i`, whose x and y are the tilt differences, and
-/// `q_mag ⊗ q_i⁻¹ = m ⊗ E_i`, whose z is the heading difference;
-/// `δ_i = −k_t (x² + y²) − k_h z²` into `delta` (`k = 1/(2 s²)`, 0 for a
+/// The aiding pair of (P3) about a reference `r`: `a = q_acc ⊗ r⁻¹`,
+/// `m = q_mag ⊗ r⁻¹`, and the factors' precisions `k = 1/(2 s²)` (0 for a
 /// factor left out).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn log_likelihoods(
-    cloud: &Cloud,
-    r: &[f64; 4],
-    k_t: f64,
-    a: &[f64; 4],
-    k_h: f64,
-    m: &[f64; 4],
-    e: &mut [Vec<f64>; 4],
-    delta: &mut Vec<f64>,
-) {
+#[derive(Debug, Clone, Copy)]
+pub(super) struct AidAbout {
+    pub(super) r: [f64; 4],
+    pub(super) k_t: f64,
+    pub(super) a: [f64; 4],
+    pub(super) k_h: f64,
+    pub(super) m: [f64; 4],
+}
+
+/// Where one likelihood pass writes: the errors, the log-likelihoods, the
+/// weights and the signed weights.
+#[derive(Debug)]
+pub(super) struct PassOut<'a> {
+    pub(super) e: &'a mut [Vec<f64>; 4],
+    pub(super) delta: &'a mut Vec<f64>,
+    pub(super) weights: &'a mut Vec<f64>,
+    pub(super) signed: &'a mut Vec<f64>,
+}
+
+/// (P3) for every particle in one pass: its error `E_i = r ⊗ q_i⁻¹` (as
+/// [`Cloud::errors`]); `q_acc ⊗ q_i⁻¹ = a ⊗ E_i`, whose x and y are the tilt
+/// differences, and `q_mag ⊗ q_i⁻¹ = m ⊗ E_i`, whose z is the heading
+/// difference; `δ_i = −k_t (x² + y²) − k_h z²`; `lw_i ← lw_i + α δ_i`; and
+/// the weight `w_i = exp(lw_i)` with its signed copy `s_i w_i` (`s_i` the
+/// sign of `E_i`'s `w`). Returns the largest `lw_i`: the weights are right
+/// (not overflowed, not all underflowed) only if it is in `[−300, 0]`, which
+/// holds when every `lw_i ≤ 0` on entry (the largest is 0 after each update
+/// and after a resampling) and the likelihood is not far narrower than the
+/// cloud; otherwise the caller weighs again about the largest.
+pub(super) fn likelihood_pass(
+    cloud: &mut Cloud,
+    aid: &AidAbout,
+    alpha: f64,
+    out: PassOut<'_>,
+) -> f64 {
     let n = cloud.len();
-    for v in e.iter_mut() {
+    for v in out.e.iter_mut() {
         v.resize(n, 0.0);
     }
-    delta.resize(n, 0.0);
-    let delta = &mut delta[..n];
-    let [e0, e1, e2, e3] = e;
+    for v in [&mut *out.delta, &mut *out.weights, &mut *out.signed] {
+        v.resize(n, 0.0);
+    }
+    let delta = &mut out.delta[..n];
+    let weights = &mut out.weights[..n];
+    let signed = &mut out.signed[..n];
+    let [e0, e1, e2, e3] = out.e;
     let (e0, e1, e2, e3) = (&mut e0[..n], &mut e1[..n], &mut e2[..n], &mut e3[..n]);
     let [qw, qx, qy, qz] = &cloud.q;
     let (qw, qx, qy, qz) = (&qw[..n], &qx[..n], &qy[..n], &qz[..n]);
+    let lw = &mut cloud.lw[..n];
+    let AidAbout { r, k_t, a, k_h, m } = *aid;
     for i in 0..n {
         let (w, x, y, z) = (qw[i], qx[i], qy[i], qz[i]);
         let f0 = r[0] * w + r[1] * x + r[2] * y + r[3] * z;
@@ -219,8 +256,25 @@ pub(super) fn log_likelihoods(
         let dx = a[0] * f1 + a[1] * f0 + a[2] * f3 - a[3] * f2;
         let dy = a[0] * f2 - a[1] * f3 + a[2] * f0 + a[3] * f1;
         let dz = m[0] * f3 + m[1] * f2 - m[2] * f1 + m[3] * f0;
-        delta[i] = -(k_t * (dx * dx + dy * dy) + k_h * (dz * dz));
+        let d = -(k_t * (dx * dx + dy * dy) + k_h * (dz * dz));
+        delta[i] = d;
+        let l = lw[i] + alpha * d;
+        lw[i] = l;
+        let wt = exp_nonpositive(l);
+        weights[i] = wt;
+        signed[i] = if f0 < 0.0 { -wt } else { wt };
     }
+    let mut max = [f64::NEG_INFINITY; LANES];
+    let (chunks, rest) = lw.as_chunks::<LANES>();
+    for c in chunks {
+        for j in 0..LANES {
+            max[j] = max[j].max(c[j]);
+        }
+    }
+    for v in rest {
+        max[0] = max[0].max(*v);
+    }
+    largest(max)
 }
 
 /// `lw_i ← lw_i + α δ_i`; returns the largest `lw_i`.
@@ -303,6 +357,18 @@ pub(super) fn moments(
             .zip(&e[0][..n])
             .map(|(&w, &e0)| if e0 < 0.0 { -w } else { w }),
     );
+    signed_moments(e, b, weights, signed, r)
+}
+
+/// [`moments`] with the signed weights `s_i w_i` already in `signed`.
+pub(super) fn signed_moments(
+    e: &[Vec<f64>; 4],
+    b: &[Vec<f64>; 3],
+    weights: &[f64],
+    signed: &[f64],
+    r: &[f64; 4],
+) -> Moments {
+    let n = weights.len();
     // Three passes of four sums each over whole chunks (particle i in
     // partial sum i mod LANES), then the rest.
     let full = n - n % LANES;

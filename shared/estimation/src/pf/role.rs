@@ -95,6 +95,8 @@ impl AttitudeEstimator for ParticleFilter {
         self.accel_lp = None;
         self.bias_walk_steps = 0;
         self.bias_walk_s = 0.0;
+        self.noise_steps = 0;
+        self.noise_s = 0.0;
         self.nav_pending = Vector3::zeros();
         Ok(())
     }

@@ -151,17 +151,25 @@ impl ParticleFilter {
             // (P3) about the current estimate r: E_i = r ⊗ q_i⁻¹ once, the
             // aiding references as a ⊗ r⁻¹.
             let r = to_array(&self.q_hat);
-            cloud::log_likelihoods(
-                &self.particles,
-                &r,
-                aid.k_t,
-                &qmul_inv(&aid.q_acc, &r),
-                aid.k_h,
-                &qmul_inv(&aid.q_mag, &r),
-                &mut self.errors,
-                &mut delta,
+            let about = cloud::AidAbout {
+                r,
+                k_t: aid.k_t,
+                a: qmul_inv(&aid.q_acc, &r),
+                k_h: aid.k_h,
+                m: qmul_inv(&aid.q_mag, &r),
+            };
+            let max = cloud::likelihood_pass(
+                &mut self.particles,
+                &about,
+                remaining,
+                cloud::PassOut {
+                    e: &mut self.errors,
+                    delta: &mut delta,
+                    weights: &mut self.weights,
+                    signed: &mut self.signed,
+                },
             );
-            let sum_sq = self.apply_log_likelihoods(&delta, remaining, &r);
+            let sum_sq = self.finish_pass(max, &delta, &r);
             if stage == MAX_TEMPER_STAGES || n_th < 1.0 || 1.0 / sum_sq >= n_th {
                 // (P6): eq. 46 and resampling.
                 if 1.0 / sum_sq < n_th {
@@ -245,6 +253,47 @@ impl ParticleFilter {
         self.bias_hat += Vector3::from(shift);
     }
 
+    /// Normalises the weights of [`cloud::likelihood_pass`] (whose largest
+    /// log weight is `max`) and takes the estimate, with the errors in
+    /// `self.errors` taken about `r`; returns `Σ w_i²`. Weighs again about
+    /// `max` when the pass's weights could not be used.
+    fn finish_pass(&mut self, max: f64, delta: &[f64], r: &[f64; 4]) -> f64 {
+        if !max.is_finite() {
+            // Cannot happen with finite inputs; the weights restart equal.
+            let n = self.particles.len() as f64;
+            self.particles.lw.iter_mut().for_each(|l| *l = 0.0);
+            self.weights.iter_mut().for_each(|w| *w = 1.0 / n);
+            self.refresh_estimate();
+            return 1.0 / n;
+        }
+        if !(-300.0..=0.0).contains(&max) {
+            // The log weights already hold the likelihood: weigh about the
+            // largest.
+            return self.apply_log_likelihoods(delta, 0.0, r);
+        }
+        let m = cloud::signed_moments(
+            &self.errors,
+            &self.particles.b,
+            &self.weights,
+            &self.signed,
+            r,
+        );
+        self.normalise(&m, max)
+    }
+
+    /// Divides the weights by their sum and shifts the log weights by
+    /// `-shift` (their largest then 0), takes the estimate from `m`; returns
+    /// `Σ w_i²` of the normalised weights.
+    fn normalise(&mut self, m: &Moments, shift: f64) -> f64 {
+        let inv = 1.0 / m.w;
+        for (l, w) in self.particles.lw.iter_mut().zip(self.weights.iter_mut()) {
+            *l -= shift;
+            *w *= inv;
+        }
+        self.finish_moments(m);
+        m.w2 * inv * inv
+    }
+
     /// Adds `alpha` times the log-likelihoods to the log weights, normalises
     /// the weights and takes the estimate in the same pass, with the errors
     /// in `self.errors` taken about `r`; returns `Σ w_i²`.
@@ -265,12 +314,7 @@ impl ParticleFilter {
             &mut self.weights,
             &mut self.signed,
         );
-        let inv = 1.0 / m.w;
-        for w in self.weights.iter_mut() {
-            *w *= inv;
-        }
-        self.finish_moments(&m);
-        m.w2 * inv * inv
+        self.normalise(&m, 0.0)
     }
 
     /// (P6): residual resampling, then the shrinkage kernel; equal weights.
