@@ -28,7 +28,7 @@
 //! sampled coarser (0.012° steps at 285 Hz with the default σ_g, against a
 //! cloud spread of tenths of a degree), for a quarter of the random numbers.
 //! On BROAD's eight trials the mean total RMSE moved by less than its
-//! seed-to-seed scatter (measured in `launch/src/bench/attitude.rs`).
+//! seed-to-seed scatter (BENCHMARKS.md, "Attitude").
 //!
 //! Eq. 28 is `q_i ← (q_i + ½ T_s q_i ⊗ [0, ω]) / ‖·‖`, i.e. `q_i ⊗ exp(θ)` to
 //! first order in `|θ|`. Here `exp(θ)` is carried to fourth order,

@@ -28,8 +28,8 @@
 //! the bias random walk, and the kernel that spreads copies after a
 //! resampling (P6); sums of them are Gaussian to the central limit theorem
 //! long before the cloud is reweighted away from them. A draw costs about
-//! a nanosecond, against about 5 ns for ChaCha8 and a ziggurat, which was
-//! a third of the filter's time at 1,000 particles.
+//! 14 instructions, all of them SIMD over four streams (callgrind), where
+//! ChaCha8 and a ziggurat took a scalar branchy path per draw.
 
 /// Streams run side by side: enough for the compiler's loop vectoriser
 /// (with eight, its cost model left the rotations scalar on SSE2).
