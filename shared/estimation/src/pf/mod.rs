@@ -23,12 +23,24 @@
 //! b_i ← b_i + ζ_i,   ζ_i ~ N(0, σ_b² Δt_b I), every 16 samples (Δt_b their span)
 //! ```
 //!
+//! η_i too is drawn on a grid, every 4 samples with the variance of their
+//! span, `N(0, σ_g² Δt_η I)`, and added on that sample: the same diffusion
+//! sampled coarser (0.012° steps at 285 Hz with the default σ_g, against a
+//! cloud spread of tenths of a degree), for a quarter of the random numbers.
+//! On BROAD's eight trials the mean total RMSE moved by less than its
+//! seed-to-seed scatter (BENCHMARKS.md, "Attitude").
+//!
 //! Eq. 28 is `q_i ← (q_i + ½ T_s q_i ⊗ [0, ω]) / ‖·‖`, i.e. `q_i ⊗ exp(θ)` to
 //! first order in `|θ|`. Here `exp(θ)` is carried to fourth order,
 //! `[1 − |θ|²/8 + |θ|⁴/384, (½ − |θ|²/48) θ]`, which is unit to `|θ|⁶/4608`
 //! (5e-12 at 16 rad/s and 285 Hz) without a sine or cosine per particle,
 //! and the Earth rate is compensated as in [`crate::gyro`] (one quaternion
-//! for all particles). σ_g is the process noise density: the gyro's angle
+//! for all particles), applied every 16 samples with their span: a
+//! left (navigation-frame) factor commutes with the right (body-frame)
+//! factors, so the product on that grid is the same, and between its points
+//! the cloud lags by at most 15 samples of Earth rate (4e-6 rad at 285 Hz);
+//! the estimate is moved with it, and each particle is renormalised there
+//! by one Newton step (the factors are unit to 5e-12). σ_g is the process noise density: the gyro's angle
 //! random walk plus what the gyro model leaves out (`gyro_noise_deg_s_rt_hz`);
 //! the bias walks with density σ_b, drawn on a 16-sample grid (the same
 //! process sampled coarser, which saves five sixths of the random numbers).
@@ -148,7 +160,12 @@
 //! navigation-frame attitude error `δθ_i = log(q_i ⊗ q̂⁻¹)` and the bias:
 //! `x_i ← x̄ + a (x_i − x̄) + h L ε_i`, `L Lᵀ` the cloud's covariance,
 //! `h = (4 / (N (d + 2)))^{1/(d+4)}` (the Gaussian kernel's optimal
-//! bandwidth, d = 6), `a = √(1 − h²)`. Weights are then `1/N`.
+//! bandwidth, d = 6), `a = √(1 − h²)`. Weights are then `1/N`. The attitude
+//! error is taken in the chart `δθ_i = 2 s_i vec(q_i ⊗ q̂⁻¹)` (`s_i` the sign
+//! that makes the scalar part positive), equal to the logarithm to third
+//! order in the angle and inverted exactly by `q_i = [√(1 − |δθ/2|²), δθ/2]
+//! ⊗ q̂`: a square root per particle instead of an arc tangent, a sine and a
+//! cosine.
 //!
 //! # Progressive correction (P7)
 //!
@@ -173,12 +190,26 @@
 //!
 //! # Determinism
 //!
-//! Every random number comes from one ChaCha8 generator seeded by `seed`, and
-//! every loop runs in particle order: the same seed and inputs give the same
-//! output bit for bit. A restore re-seeds the generator from the seed and the
-//! snapshot's bits, so restoring a snapshot twice gives the same particles.
+//! Every random number comes from one generator seeded by `seed` (eight
+//! xoshiro128++ streams, normal draws by (N1) of [`noise`]), every loop runs
+//! in particle order, and sums are taken in a fixed order of partial sums:
+//! the same seed and inputs give the same output bit for bit. A restore
+//! re-seeds the generator from the seed and the snapshot's bits, so
+//! restoring a snapshot twice gives the same particles.
+//!
+//! # Speed
+//!
+//! The particles are stored as a structure of arrays ([`cloud`]) and every
+//! per-sample loop runs over plain slices without a branch or a library
+//! call (the weights' exponential in [`math`]), so that the compiler
+//! vectorises it; no per-sample allocation. One likelihood pass computes
+//! each particle's error `E_i = q̂⁻ ⊗ q_i⁻¹` once and takes from it the tilt
+//! and heading differences (P3), the sign alignment and the spread.
 
 mod aiding;
+mod cloud;
+mod math;
+mod noise;
 mod params;
 mod resample;
 mod role;
@@ -190,10 +221,10 @@ pub use aiding::{AidingError, aiding_quaternion, tilt_quaternions};
 pub use params::{MAX_PARTICLES, PfConfig, PfParams, PfParamsError};
 
 use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use thiserror::Error;
+
+use cloud::{Cloud, Moments};
+use noise::Noise;
 
 use crate::attitude::{quat_from_rotation_vector, wrap_pi};
 use crate::earth::{earth_rate_ned, normal_gravity};
@@ -205,6 +236,8 @@ use crate::mekf::MagneticReference;
 
 /// Samples between two draws of the bias random walk (P1).
 const BIAS_WALK_STRIDE: u32 = 16;
+/// Samples between two draws of the gyro process noise (P1).
+const PROCESS_NOISE_STRIDE: u32 = 4;
 /// Time constant of the rest detector's low-pass means, s (P5).
 const REST_LOWPASS_S: f64 = 0.5;
 /// Smallest per-sample gyro variance of the bias measurement at rest,
@@ -215,15 +248,6 @@ const REST_VARIANCE_FLOOR: f64 = 3.046e-10;
 const MAX_TEMPER_STAGES: usize = 20;
 /// Bisection steps for a stage's fraction (P7).
 const BISECTION_STEPS: u32 = 12;
-
-/// One particle: attitude `[w, x, y, z]` (body → NED), gyro bias (rad/s) and
-/// log weight (64 bytes).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Particle {
-    q: [f64; 4],
-    b: [f64; 3],
-    lw: f64,
-}
 
 /// Why a [`ParticleFilter`] could not be made.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
@@ -313,13 +337,21 @@ struct Rest {
 #[derive(Debug, Clone)]
 pub struct ParticleFilter {
     config: PfConfig,
-    particles: Vec<Particle>,
-    /// Scratch: normalised weights of the last update, and resampling buffers.
+    particles: Cloud,
+    /// Normalised weights of the last update.
     weights: Vec<f64>,
-    scratch: Vec<Particle>,
+    /// Scratch, kept between samples (no allocation per sample): the
+    /// resampled cloud, random draws, log-likelihoods, the errors
+    /// `E_i = q̂ ⊗ q_i⁻¹`, resampling parents, ESS exponents, signed
+    /// weights.
+    scratch: Cloud,
     normals: Vec<f64>,
     delta: Vec<f64>,
-    rng: ChaCha8Rng,
+    errors: [Vec<f64>; 4],
+    parents: Vec<u32>,
+    exponents: Vec<f64>,
+    signed: Vec<f64>,
+    rng: Noise,
     q_hat: UnitQuaternion<f64>,
     bias_hat: Vector3<f64>,
     /// Weighted spread of the attitude about the estimate, N, E, D, rad.
@@ -333,6 +365,12 @@ pub struct ParticleFilter {
     last_gyro: Option<(Vector3<f64>, f64)>,
     bias_walk_steps: u32,
     bias_walk_s: f64,
+    /// Samples and seconds since the last process-noise draw (P1).
+    noise_steps: u32,
+    noise_s: f64,
+    /// Earth-rate angle not yet applied to the particles and the estimate
+    /// (P1), rad, NED.
+    nav_pending: Vector3<f64>,
     rest: Rest,
     /// The low-passed specific force in the navigation frame (P2').
     accel_lp: Option<Vector3<f64>>,
@@ -346,36 +384,9 @@ fn finite3(v: &Vector3<f64>) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-/// `exp(θ)` to fourth order in `|θ|` (P1): `[1 − t/8 + t²/384, (½ − t/48) θ]`,
-/// `t = |θ|²`.
-#[inline]
-fn exp_series(theta: [f64; 3]) -> [f64; 4] {
-    let t = theta[0] * theta[0] + theta[1] * theta[1] + theta[2] * theta[2];
-    let c = 1.0 - t * (1.0 / 8.0) + t * t * (1.0 / 384.0);
-    let s = 0.5 - t * (1.0 / 48.0);
-    [c, s * theta[0], s * theta[1], s * theta[2]]
-}
-
-/// Hamilton product `a ⊗ b` of `[w, x, y, z]` arrays.
-#[inline]
-fn qmul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
-    [
-        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
-    ]
-}
-
 /// A particle's attitude (body → NED) as its stored `[w, x, y, z]`.
 fn to_array(q: &UnitQuaternion<f64>) -> [f64; 4] {
     Rotation::<Frd, Ned>::from_nalgebra(*q).to_wxyz()
-}
-
-/// A stored `[w, x, y, z]` as a unit quaternion (renormalised, unchecked: the
-/// filter's own arithmetic keeps it finite).
-fn to_unit(q: &[f64; 4]) -> UnitQuaternion<f64> {
-    UnitQuaternion::new_normalize(Rotation::<Frd, Ned>::quaternion_from_wxyz(*q))
 }
 
 /// FNV-1a over 64-bit words: mixes a snapshot into the restore seed.
@@ -388,55 +399,6 @@ fn fnv1a(words: impl IntoIterator<Item = u64>) -> u64 {
         }
     }
     h
-}
-
-/// Weighted sums for the estimate (eq. 47) and the attitude spread, with
-/// weights that need not be normalised: quaternion components sign-aligned
-/// with a reference, biases, and the small-angle error `2 vec(q_i ⊗ r⁻¹)`
-/// (exact to third order) and its square per N, E, D axis.
-#[derive(Debug, Clone, Copy)]
-struct Moments {
-    r: [f64; 4],
-    r_inv: [f64; 4],
-    w: f64,
-    q: [f64; 4],
-    b: [f64; 3],
-    d: [f64; 3],
-    d2: [f64; 3],
-}
-
-impl Moments {
-    fn new(reference: &UnitQuaternion<f64>) -> Self {
-        Self {
-            r: to_array(reference),
-            r_inv: to_array(&reference.inverse()),
-            w: 0.0,
-            q: [0.0; 4],
-            b: [0.0; 3],
-            d: [0.0; 3],
-            d2: [0.0; 3],
-        }
-    }
-
-    #[inline]
-    fn add(&mut self, p: &Particle, w: f64) {
-        let dot = p.q[0] * self.r[0] + p.q[1] * self.r[1] + p.q[2] * self.r[2] + p.q[3] * self.r[3];
-        let ws = if dot < 0.0 { -w } else { w };
-        for k in 0..4 {
-            self.q[k] += ws * p.q[k];
-        }
-        for k in 0..3 {
-            self.b[k] += w * p.b[k];
-        }
-        let e = qmul(&p.q, &self.r_inv);
-        let s = if e[0] < 0.0 { -2.0 } else { 2.0 };
-        for k in 0..3 {
-            let v = s * e[k + 1];
-            self.d[k] += w * v;
-            self.d2[k] += w * v * v;
-        }
-        self.w += w;
-    }
 }
 
 impl ParticleFilter {
@@ -460,19 +422,21 @@ impl ParticleFilter {
         let n = config.particles;
         let mut pf = Self {
             config: *config,
-            particles: vec![
-                Particle {
-                    q: to_array(&q_nb),
-                    b: [0.0; 3],
-                    lw: 0.0,
-                };
-                n
-            ],
+            particles: Cloud::new(n, to_array(&q_nb)),
             weights: vec![1.0 / n as f64; n],
-            scratch: Vec::with_capacity(n),
-            normals: Vec::with_capacity(3 * n),
+            scratch: Cloud::new(n, to_array(&q_nb)),
+            normals: Vec::with_capacity(6 * n),
             delta: Vec::with_capacity(n),
-            rng: ChaCha8Rng::seed_from_u64(config.seed),
+            errors: [
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+            ],
+            parents: Vec::with_capacity(n),
+            exponents: Vec::with_capacity(n),
+            signed: Vec::with_capacity(n),
+            rng: Noise::new(config.seed),
             q_hat: q_nb,
             bias_hat: Vector3::zeros(),
             spread: Vector3::zeros(),
@@ -483,6 +447,9 @@ impl ParticleFilter {
             last_gyro: None,
             bias_walk_steps: 0,
             bias_walk_s: 0.0,
+            noise_steps: 0,
+            noise_s: 0.0,
+            nav_pending: Vector3::zeros(),
             rest: Rest {
                 started: false,
                 gyro_lp: Vector3::zeros(),
@@ -528,10 +495,18 @@ impl ParticleFilter {
         if !(finite3(&gyro_bias) && std_rad_s >= 0.0 && std_rad_s.is_finite()) {
             return Err(PfNewError::BadInitialState);
         }
-        for p in &mut self.particles {
-            for k in 0..3 {
-                let e: f64 = StandardNormal.sample(&mut self.rng);
-                p.b[k] = gyro_bias[k] + std_rad_s * e;
+        let n = self.particles.len();
+        self.normals.resize(3 * n, 0.0);
+        self.rng.fill_normal(&mut self.normals, std_rad_s);
+        for (k, (b, e)) in self
+            .particles
+            .b
+            .iter_mut()
+            .zip(self.normals.chunks_exact(n))
+            .enumerate()
+        {
+            for (b, e) in b.iter_mut().zip(e) {
+                *b = gyro_bias[k] + e;
             }
         }
         self.refresh_estimate();
@@ -551,13 +526,17 @@ impl ParticleFilter {
             return Err(PfNewError::BadInitialState);
         }
         let q0 = self.q_hat;
-        for p in &mut self.particles {
-            let mut e = [0.0; 3];
-            for (k, v) in e.iter_mut().enumerate() {
-                let n: f64 = StandardNormal.sample(&mut self.rng);
-                *v = n * if k < 2 { tilt_std_rad } else { heading_std_rad };
-            }
-            p.q = to_array(&(quat_from_rotation_vector(&Vector3::from(e)) * q0));
+        let n = self.particles.len();
+        self.normals.resize(3 * n, 0.0);
+        self.rng.fill_normal(&mut self.normals, 1.0);
+        for i in 0..n {
+            let e = Vector3::new(
+                self.normals[i] * tilt_std_rad,
+                self.normals[n + i] * tilt_std_rad,
+                self.normals[2 * n + i] * heading_std_rad,
+            );
+            let q = to_array(&(quat_from_rotation_vector(&e) * q0));
+            self.particles.set_q(i, q);
         }
         self.refresh_estimate();
         Ok(self)
@@ -596,7 +575,7 @@ impl ParticleFilter {
 
     /// Always false (a filter has at least two particles).
     pub fn is_empty(&self) -> bool {
-        self.particles.is_empty()
+        self.particles.len() == 0
     }
 
     /// Effective sample size of the current weights (eq. 46).
@@ -605,9 +584,12 @@ impl ParticleFilter {
     }
 
     /// Weighted sample covariance of the attitude error about N, E, D
-    /// (`δθ_i = log(q_i ⊗ q̂⁻¹)`, rad) and the bias (rad/s), 6×6.
+    /// (`δθ_i = 2 s_i vec(q_i ⊗ q̂⁻¹)`, the chart of (P6): `log(q_i ⊗ q̂⁻¹)`
+    /// to third order, rad) and the bias (rad/s), 6×6.
     pub fn covariance(&self) -> Matrix6<f64> {
-        resample::cloud_covariance(&self.particles, &self.weights, &self.q_hat, &self.bias_hat)
+        let mut errors = Default::default();
+        self.particles.errors(&to_array(&self.q_hat), &mut errors);
+        resample::cloud_covariance(&self.particles, &errors, &self.weights, &self.bias_hat)
     }
 
     /// Whether the rest detector currently holds the sensor still (P5).
@@ -621,16 +603,20 @@ impl ParticleFilter {
     fn draw_particles(&mut self, q: &UnitQuaternion<f64>, b: &Vector3<f64>, cov: &Matrix6<f64>) {
         let l = resample::cholesky_floor(cov);
         let n = self.particles.len();
+        self.normals.resize(6 * n, 0.0);
+        self.rng.fill_normal(&mut self.normals, 1.0);
         let draws: Vec<Vector6<f64>> = (0..n)
-            .map(|_| l * Vector6::from_fn(|_, _| StandardNormal.sample(&mut self.rng)))
+            .map(|i| l * Vector6::from_fn(|k, _| self.normals[k * n + i]))
             .collect();
         let mean = draws.iter().sum::<Vector6<f64>>() / n as f64;
-        for (p, x) in self.particles.iter_mut().zip(&draws) {
+        for (i, x) in draws.iter().enumerate() {
             let x = x - mean;
             let dq = quat_from_rotation_vector(&Vector3::new(x[0], x[1], x[2]));
-            p.q = to_array(&(dq * q));
-            p.b = [b.x + x[3], b.y + x[4], b.z + x[5]];
-            p.lw = 0.0;
+            self.particles.set_q(i, to_array(&(dq * q)));
+            for k in 0..3 {
+                self.particles.b[k][i] = b[k] + x[3 + k];
+            }
+            self.particles.lw[i] = 0.0;
         }
         self.weights.iter_mut().for_each(|w| *w = 1.0 / n as f64);
         self.q_hat = *q;
@@ -641,17 +627,22 @@ impl ParticleFilter {
     /// components sign-aligned with the previous estimate, renormalised; bias;
     /// and the attitude spread.
     fn refresh_estimate(&mut self) {
-        let mut m = Moments::new(&self.q_hat);
-        for (p, &w) in self.particles.iter().zip(&self.weights) {
-            m.add(p, w);
-        }
+        let r = to_array(&self.q_hat);
+        self.particles.errors(&r, &mut self.errors);
+        let m = cloud::moments(
+            &self.errors,
+            &self.particles.b,
+            &self.weights,
+            &r,
+            &mut self.signed,
+        );
         self.finish_moments(&m);
     }
 
     /// Takes the estimate and spread from accumulated moments (unchanged if
     /// they are not finite).
     fn finish_moments(&mut self, m: &Moments) {
-        let q = Rotation::<Frd, Ned>::quaternion_from_wxyz(m.q);
+        let q = Rotation::<Frd, Ned>::quaternion_from_wxyz(m.attitude_sum());
         if q.norm() > 0.0 && q.coords.iter().all(|v| v.is_finite()) {
             self.q_hat = UnitQuaternion::new_normalize(q);
         }
@@ -660,10 +651,7 @@ impl ParticleFilter {
             if finite3(&b) {
                 self.bias_hat = b;
             }
-            let spread = Vector3::from_fn(|k, _| {
-                let mean = m.d[k] / m.w;
-                (m.d2[k] / m.w - mean * mean).max(0.0).sqrt()
-            });
+            let spread = Vector3::from(m.spread());
             if finite3(&spread) {
                 self.spread = spread;
             }
@@ -684,50 +672,47 @@ impl ParticleFilter {
         if !(dt_s > 0.0 && dt_s.is_finite()) {
             return Err(PfPropagateError::BadInterval(dt_s));
         }
-        let nav = to_array(&quat_from_rotation_vector(&(-self.omega_ie_n * dt_s)));
-        let sigma = self.config.gyro_noise_rad_rt_s * dt_s.sqrt();
         let n = self.particles.len();
-        self.normals.clear();
-        for _ in 0..3 * n {
-            let e: f64 = StandardNormal.sample(&mut self.rng);
-            self.normals.push(e * sigma);
-        }
         let w = [gyro_rad_s.x, gyro_rad_s.y, gyro_rad_s.z];
-        for (p, eta) in self.particles.iter_mut().zip(self.normals.chunks_exact(3)) {
-            let theta = [
-                (w[0] - p.b[0]) * dt_s + eta[0],
-                (w[1] - p.b[1]) * dt_s + eta[1],
-                (w[2] - p.b[2]) * dt_s + eta[2],
-            ];
-            let q = qmul(&nav, &qmul(&p.q, &exp_series(theta)));
-            // One Newton step towards unit norm (the factors are unit to 5e-12).
-            let n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-            let k = 1.5 - 0.5 * n2;
-            p.q = [q[0] * k, q[1] * k, q[2] * k, q[3] * k];
-        }
-        // Bias random walk on a coarser grid (P1).
-        self.bias_walk_steps += 1;
-        self.bias_walk_s += dt_s;
-        if self.bias_walk_steps >= BIAS_WALK_STRIDE {
-            let s = self.config.gyro_bias_walk_rad_s_rt_s * self.bias_walk_s.sqrt();
-            if s > 0.0 {
-                for p in self.particles.iter_mut() {
-                    for k in 0..3 {
-                        let e: f64 = StandardNormal.sample(&mut self.rng);
-                        p.b[k] += s * e;
-                    }
-                }
-            }
-            self.bias_walk_steps = 0;
-            self.bias_walk_s = 0.0;
+        // The process noise on a grid of PROCESS_NOISE_STRIDE samples, with
+        // the variance of their span (P1).
+        self.noise_steps += 1;
+        self.noise_s += dt_s;
+        if self.noise_steps >= PROCESS_NOISE_STRIDE {
+            let sigma = self.config.gyro_noise_rad_rt_s * self.noise_s.sqrt();
+            self.normals.resize(3 * n, 0.0);
+            self.rng.fill_normal(&mut self.normals, sigma);
+            self.particles.propagate::<true>(w, dt_s, &self.normals);
+            self.noise_steps = 0;
+            self.noise_s = 0.0;
+        } else {
+            self.particles.propagate::<false>(w, dt_s, &[]);
         }
         // The predicted estimate: the previous one moved by the mean rate (the
         // weighted mean of the moved particles to second order in their
         // spread; the update takes the exact mean).
         let rate = gyro_rad_s - self.bias_hat;
         self.q_hat = UnitQuaternion::new_normalize(
-            (to_unit(&nav) * self.q_hat * quat_from_rotation_vector(&(rate * dt_s))).into_inner(),
+            (self.q_hat * quat_from_rotation_vector(&(rate * dt_s))).into_inner(),
         );
+        // The Earth rate, and the bias random walk, on a coarser grid (P1).
+        self.nav_pending -= self.omega_ie_n * dt_s;
+        self.bias_walk_steps += 1;
+        self.bias_walk_s += dt_s;
+        if self.bias_walk_steps >= BIAS_WALK_STRIDE {
+            let nav = quat_from_rotation_vector(&self.nav_pending);
+            self.particles.rotate_nav(to_array(&nav));
+            self.q_hat = UnitQuaternion::new_normalize((nav * self.q_hat).into_inner());
+            self.nav_pending = Vector3::zeros();
+            let s = self.config.gyro_bias_walk_rad_s_rt_s * self.bias_walk_s.sqrt();
+            if s > 0.0 {
+                self.normals.resize(3 * n, 0.0);
+                self.rng.fill_normal(&mut self.normals, s);
+                self.particles.add_bias(&self.normals);
+            }
+            self.bias_walk_steps = 0;
+            self.bias_walk_s = 0.0;
+        }
         self.last_gyro = Some((*gyro_rad_s, dt_s));
         Ok(())
     }

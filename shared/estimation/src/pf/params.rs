@@ -26,8 +26,9 @@ pub struct PfParams {
     /// pitch-and-roll condition gave 0.23°/0.30° roll/pitch RMS instead of
     /// 0.08°/0.09°).
     pub particles: usize,
-    /// Seed of the filter's ChaCha8 generator: the same seed and inputs give
-    /// the same estimates, bit for bit. Default 0.
+    /// Seed of the filter's generator (xoshiro128++ streams, `pf/noise.rs`):
+    /// the same seed and inputs give the same estimates, bit for bit.
+    /// Default 0.
     pub seed: u64,
     /// Process noise density of the prediction (eq. 28), °/s/√Hz: the
     /// gyro's angle random walk plus what the gyro model leaves out (scale

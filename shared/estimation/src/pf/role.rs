@@ -82,7 +82,7 @@ impl AttitudeEstimator for ParticleFilter {
                 .chain(s.covariance.iter().flatten())
                 .map(|v| v.to_bits())
                 .chain([u64::from(s.calibration)]);
-        self.rng = ChaCha8Rng::seed_from_u64(self.config.seed ^ fnv1a(words));
+        self.rng = Noise::new(self.config.seed ^ fnv1a(words));
         self.draw_particles(&q, &b, &cov);
         // The snapshot's quaternion bit for bit when it is unit to rounding
         // (a restored instance continues from exactly the published state).
@@ -95,6 +95,9 @@ impl AttitudeEstimator for ParticleFilter {
         self.accel_lp = None;
         self.bias_walk_steps = 0;
         self.bias_walk_s = 0.0;
+        self.noise_steps = 0;
+        self.noise_s = 0.0;
+        self.nav_pending = Vector3::zeros();
         Ok(())
     }
 }

@@ -621,24 +621,29 @@ fn invalid_input_does_not_corrupt_the_state() {
 /// ⌊N w_i⌋ copies of each particle, N in all, equal weights after.
 #[test]
 fn residual_resampling_selects_by_weight() {
-    let particles: Vec<Particle> = (0..10)
-        .map(|i| Particle {
-            q: [1.0, 0.0, 0.0, 0.0],
-            b: [i as f64, 0.0, 0.0],
-            lw: 0.0,
-        })
-        .collect();
+    let mut particles = Cloud::new(10, [1.0, 0.0, 0.0, 0.0]);
+    for (i, b) in particles.b[0].iter_mut().enumerate() {
+        *b = i as f64;
+    }
+    particles.lw.iter_mut().for_each(|l| *l = -3.0);
     let mut weights = vec![0.0; 10];
     weights[2] = 0.55;
     weights[7] = 0.45;
-    let mut out = Vec::new();
-    let mut rng = ChaCha8Rng::seed_from_u64(1);
-    resample::residual(&particles, &weights, &mut out, &mut rng);
+    let mut parents = Vec::new();
+    let mut rng = Noise::new(1);
+    resample::residual(&weights, &mut parents, &mut rng);
+    let mut out = Cloud::default();
+    particles.gather(&parents, &mut out);
     assert_eq!(out.len(), 10);
-    let count = |b: f64| out.iter().filter(|p| p.b[0] == b).count();
+    let count = |b: f64| out.b[0].iter().filter(|x| **x == b).count();
     // 5.5 and 4.5 expected copies: 5 + 4 selected, the last place drawn.
     assert!(count(2.0) >= 5 && count(7.0) >= 4 && count(2.0) + count(7.0) == 10);
-    assert!(out.iter().all(|p| p.lw == 0.0));
+    // Copies whole: every array follows its parent.
+    for (j, &p) in parents.iter().enumerate() {
+        assert_eq!(out.b[0][j], p as f64);
+        assert_eq!(out.q[0][j], 1.0);
+        assert_eq!(out.lw[j], -3.0);
+    }
     // N_eff of these weights.
     let n_eff = 1.0 / weights.iter().map(|w| w * w).sum::<f64>();
     assert!((n_eff - 1.0 / (0.55f64.powi(2) + 0.45f64.powi(2))).abs() < 1e-12);

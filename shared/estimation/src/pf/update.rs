@@ -14,46 +14,9 @@ pub(super) struct Aid {
     q_mag: [f64; 4],
 }
 
-/// The log-likelihood of each particle (P3) into `out`.
-pub(super) fn log_likelihoods(particles: &[Particle], aid: &Aid, out: &mut Vec<f64>) {
-    out.clear();
-    out.extend(particles.iter().map(|p| {
-        let (w, x, y, z) = (p.q[0], p.q[1], p.q[2], p.q[3]);
-        let mut ll = 0.0;
-        if aid.k_t > 0.0 {
-            // x and y of q_acc ⊗ q_i⁻¹.
-            let a = &aid.q_acc;
-            let dx = -a[0] * x + a[1] * w - a[2] * z + a[3] * y;
-            let dy = -a[0] * y + a[1] * z + a[2] * w - a[3] * x;
-            ll -= aid.k_t * (dx * dx + dy * dy);
-        }
-        if aid.k_h > 0.0 {
-            // z of q_mag ⊗ q_i⁻¹.
-            let m = &aid.q_mag;
-            let dz = -m[0] * z - m[1] * y + m[2] * x + m[3] * w;
-            ll -= aid.k_h * dz * dz;
-        }
-        ll
-    }));
-}
-
-/// N_eff (eq. 46) of the weights `∝ exp(lw_i + alpha · delta_i)`.
-pub(super) fn ess_with(particles: &[Particle], delta: &[f64], alpha: f64) -> f64 {
-    let max = particles
-        .iter()
-        .zip(delta)
-        .map(|(p, d)| p.lw + alpha * d)
-        .fold(f64::NEG_INFINITY, f64::max);
-    if !max.is_finite() {
-        return 0.0;
-    }
-    let (mut sum, mut sum_sq) = (0.0, 0.0);
-    for (p, d) in particles.iter().zip(delta) {
-        let w = (p.lw + alpha * d - max).exp();
-        sum += w;
-        sum_sq += w * w;
-    }
-    sum * sum / sum_sq
+/// `a ⊗ b⁻¹` of `[w, x, y, z]` arrays (`b` unit).
+fn qmul_inv(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    math::qmul(a, &[b[0], -b[1], -b[2], -b[3]])
 }
 
 impl ParticleFilter {
@@ -185,8 +148,28 @@ impl ParticleFilter {
         let mut delta = std::mem::take(&mut self.delta);
         let mut remaining = 1.0;
         for stage in 0..=MAX_TEMPER_STAGES {
-            log_likelihoods(&self.particles, &aid, &mut delta);
-            let sum_sq = self.apply_log_likelihoods(&delta, remaining);
+            // (P3) about the current estimate r: E_i = r ⊗ q_i⁻¹ once, the
+            // aiding references as a ⊗ r⁻¹.
+            let r = to_array(&self.q_hat);
+            let about = cloud::AidAbout {
+                r,
+                k_t: aid.k_t,
+                a: qmul_inv(&aid.q_acc, &r),
+                k_h: aid.k_h,
+                m: qmul_inv(&aid.q_mag, &r),
+            };
+            let max = cloud::likelihood_pass(
+                &mut self.particles,
+                &about,
+                remaining,
+                cloud::PassOut {
+                    e: &mut self.errors,
+                    delta: &mut delta,
+                    weights: &mut self.weights,
+                    signed: &mut self.signed,
+                },
+            );
+            let sum_sq = self.finish_pass(max, &delta, &r);
             if stage == MAX_TEMPER_STAGES || n_th < 1.0 || 1.0 / sum_sq >= n_th {
                 // (P6): eq. 46 and resampling.
                 if 1.0 / sum_sq < n_th {
@@ -197,20 +180,20 @@ impl ParticleFilter {
             // (P7): too few effective particles for the whole likelihood.
             // Undo it, apply the largest fraction that keeps N_eff at N_th
             // (bisection; N_eff falls as the fraction grows), resample, go on.
-            for (p, d) in self.particles.iter_mut().zip(&delta) {
-                p.lw -= remaining * d;
+            for (l, d) in self.particles.lw.iter_mut().zip(&delta) {
+                *l -= remaining * d;
             }
             let (mut lo, mut hi) = (0.0, remaining);
             for _ in 0..BISECTION_STEPS {
                 let mid = 0.5 * (lo + hi);
-                if ess_with(&self.particles, &delta, mid) >= n_th {
+                if cloud::ess_with(&self.particles.lw, &delta, mid, &mut self.exponents) >= n_th {
                     lo = mid;
                 } else {
                     hi = mid;
                 }
             }
             let alpha = lo.max(remaining / f64::from(1u32 << BISECTION_STEPS));
-            self.apply_log_likelihoods(&delta, alpha);
+            self.apply_log_likelihoods(&delta, alpha, &r);
             remaining -= alpha;
             self.stats.tempering_stages += 1;
             self.resample();
@@ -232,11 +215,22 @@ impl ParticleFilter {
     pub(super) fn rest_bias_update(&mut self, z: &Vector3<f64>) {
         let r = self.rest.gyro_var.max(REST_VARIANCE_FLOOR);
         let mut var = [0.0; 3];
-        for (p, &w) in self.particles.iter().zip(&self.weights) {
-            for (k, v) in var.iter_mut().enumerate() {
-                let d = p.b[k] - self.bias_hat[k];
-                *v += w * d * d;
+        for (k, v) in var.iter_mut().enumerate() {
+            let b_hat = self.bias_hat[k];
+            let mut lanes = [0.0; cloud::LANES];
+            let mut chunks = self.particles.b[k].chunks_exact(cloud::LANES);
+            let mut w_chunks = self.weights.chunks_exact(cloud::LANES);
+            for (b, w) in (&mut chunks).zip(&mut w_chunks) {
+                for j in 0..cloud::LANES {
+                    let d = b[j] - b_hat;
+                    lanes[j] += w[j] * d * d;
+                }
             }
+            for (b, w) in chunks.remainder().iter().zip(w_chunks.remainder()) {
+                let d = b - b_hat;
+                lanes[0] += w * d * d;
+            }
+            *v = cloud::total(lanes);
         }
         let mut shift = [0.0; 3];
         let mut scale = [1.0; 3];
@@ -249,62 +243,103 @@ impl ParticleFilter {
             return;
         }
         let b_hat = self.bias_hat;
-        for p in self.particles.iter_mut() {
-            for (k, b) in p.b.iter_mut().enumerate() {
-                *b = b_hat[k] + shift[k] + scale[k] * (*b - b_hat[k]);
+        for (k, b) in self.particles.b.iter_mut().enumerate() {
+            let (c, sc) = (b_hat[k], scale[k]);
+            let sh = c + shift[k];
+            for b in b.iter_mut() {
+                *b = sh + sc * (*b - c);
             }
         }
         self.bias_hat += Vector3::from(shift);
     }
 
-    /// Adds `alpha` times the log-likelihoods to the log weights, normalises
-    /// the weights and takes the estimate in the same pass; returns `Σ w_i²`.
-    pub(super) fn apply_log_likelihoods(&mut self, delta: &[f64], alpha: f64) -> f64 {
-        let mut max_lw = f64::NEG_INFINITY;
-        for (p, d) in self.particles.iter_mut().zip(delta) {
-            p.lw += alpha * d;
-            max_lw = max_lw.max(p.lw);
+    /// Normalises the weights of [`cloud::likelihood_pass`] (whose largest
+    /// log weight is `max`) and takes the estimate, with the errors in
+    /// `self.errors` taken about `r`; returns `Σ w_i²`. Weighs again about
+    /// `max` when the pass's weights could not be used.
+    fn finish_pass(&mut self, max: f64, delta: &[f64], r: &[f64; 4]) -> f64 {
+        if !max.is_finite() {
+            // Cannot happen with finite inputs; the weights restart equal.
+            let n = self.particles.len() as f64;
+            self.particles.lw.iter_mut().for_each(|l| *l = 0.0);
+            self.weights.iter_mut().for_each(|w| *w = 1.0 / n);
+            self.refresh_estimate();
+            return 1.0 / n;
         }
+        if !(-300.0..=0.0).contains(&max) {
+            // The log weights already hold the likelihood: weigh about the
+            // largest.
+            return self.apply_log_likelihoods(delta, 0.0, r);
+        }
+        let m = cloud::signed_moments(
+            &self.errors,
+            &self.particles.b,
+            &self.weights,
+            &self.signed,
+            r,
+        );
+        self.normalise(&m, max)
+    }
+
+    /// Divides the weights by their sum and shifts the log weights by
+    /// `-shift` (their largest then 0), takes the estimate from `m`; returns
+    /// `Σ w_i²` of the normalised weights.
+    fn normalise(&mut self, m: &Moments, shift: f64) -> f64 {
+        let inv = 1.0 / m.w;
+        for (l, w) in self.particles.lw.iter_mut().zip(self.weights.iter_mut()) {
+            *l -= shift;
+            *w *= inv;
+        }
+        self.finish_moments(m);
+        m.w2 * inv * inv
+    }
+
+    /// Adds `alpha` times the log-likelihoods to the log weights, normalises
+    /// the weights and takes the estimate in the same pass, with the errors
+    /// in `self.errors` taken about `r`; returns `Σ w_i²`.
+    pub(super) fn apply_log_likelihoods(&mut self, delta: &[f64], alpha: f64, r: &[f64; 4]) -> f64 {
+        let max_lw = cloud::add_log_likelihoods(&mut self.particles.lw, delta, alpha);
         if !max_lw.is_finite() {
             // Cannot happen with finite inputs; keep the previous weights.
-            for (p, w) in self.particles.iter_mut().zip(&self.weights) {
-                p.lw = w.ln();
+            for (l, w) in self.particles.lw.iter_mut().zip(&self.weights) {
+                *l = w.ln();
             }
             return self.weights.iter().map(|w| w * w).sum();
         }
-        let mut m = Moments::new(&self.q_hat);
-        let mut sum_sq = 0.0;
-        for (p, w) in self.particles.iter_mut().zip(self.weights.iter_mut()) {
-            p.lw -= max_lw;
-            *w = p.lw.exp();
-            sum_sq += *w * *w;
-            m.add(p, *w);
-        }
-        let sum = m.w;
-        for w in self.weights.iter_mut() {
-            *w /= sum;
-        }
-        self.finish_moments(&m);
-        sum_sq / (sum * sum)
+        let m = cloud::weigh(
+            &mut self.particles,
+            max_lw,
+            &self.errors,
+            r,
+            &mut self.weights,
+            &mut self.signed,
+        );
+        self.normalise(&m, 0.0)
     }
 
     /// (P6): residual resampling, then the shrinkage kernel; equal weights.
     pub(super) fn resample(&mut self) {
-        let cov = self.covariance();
-        let l = resample::cholesky_floor(&cov);
-        resample::residual(
+        let r = to_array(&self.q_hat);
+        self.particles.errors(&r, &mut self.errors);
+        let cov = resample::cloud_covariance(
             &self.particles,
+            &self.errors,
             &self.weights,
-            &mut self.scratch,
-            &mut self.rng,
+            &self.bias_hat,
         );
+        let l = resample::cholesky_floor(&cov);
+        resample::residual(&self.weights, &mut self.parents, &mut self.rng);
+        self.particles.gather(&self.parents, &mut self.scratch);
         std::mem::swap(&mut self.particles, &mut self.scratch);
+        self.particles.lw.iter_mut().for_each(|l| *l = 0.0);
         resample::regularise(
             &mut self.particles,
-            &self.q_hat,
+            &r,
             &self.bias_hat,
             &l,
             &mut self.rng,
+            &mut self.errors,
+            &mut self.normals,
         );
         let n = self.particles.len() as f64;
         self.weights.iter_mut().for_each(|w| *w = 1.0 / n);
