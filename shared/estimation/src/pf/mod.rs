@@ -89,7 +89,7 @@
 //! with bias estimation and magnetic disturbance rejection", Information
 //! Fusion 91, 2023). Accelerations that come and go, and the centripetal
 //! acceleration of a turn, average out there; on BROAD it halves the
-//! inclination error (measurements in `launch/src/bench/attitude.rs`). At
+//! inclination error (measurements in `shared/bench/src/attitude.rs`). At
 //! rest (P5) the low-pass restarts from each sample.
 //!
 //! A magnetometer sample equal to the previous one is not used: a sensor that

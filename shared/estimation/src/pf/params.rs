@@ -37,7 +37,7 @@ pub struct PfParams {
     /// IMU measures 0.006 at rest, but with 0.03 the particle cloud is
     /// narrower than a hand-held IMU's real attitude error and the filter
     /// corrects too slowly: BROAD mean 2.74° against 2.41°; 0.3 gives 3.17°;
-    /// `launch/src/bench/attitude.rs`).
+    /// `shared/bench/src/attitude.rs`).
     pub gyro_noise_deg_s_rt_hz: f64,
     /// Gyro bias random walk, °/h/√h (the rate random walk K). Default 20
     /// (our choice: an MTi-30 bias wanders ~18 °/h within an hour; faster than
@@ -57,7 +57,7 @@ pub struct PfParams {
     /// 3 s low-pass). Default 0.1 (our choice: on BROAD 0.03 to 0.3 give a
     /// mean total RMSE of 2.15° to 2.61°, on the simulator 0.03 and 0.1 both
     /// stay within 0.2° in roll and pitch; sweep in
-    /// `launch/src/bench/attitude.rs`).
+    /// `shared/bench/src/attitude.rs`).
     pub tilt_noise_deg_rt_s: f64,
     /// Heading aiding noise density, °·√s: the residual magnetic distortion
     /// of the tilt-compensated heading, taken as white. With the default
