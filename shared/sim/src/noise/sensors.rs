@@ -164,8 +164,17 @@ impl DvlNoise {
         self.scale_factor
     }
 
-    /// One ping of true body velocity `v` (m/s).
-    pub fn next<R: Rng + ?Sized>(&mut self, rng: &mut R, v: Vector3<f64>) -> DvlOutcome {
+    /// One ping of true body velocity `v` (m/s). Dropouts and noise come
+    /// from `rng`, spikes from `spike_rng` alone, so that a run without
+    /// spikes (`spike_probability = 0`) draws the same noise and dropouts as
+    /// one with them: the two differ by their spikes only (paper 002 Fig. 5's
+    /// comparison, `nauta bench nav`'s spike case).
+    pub fn next<R: Rng + ?Sized, S: Rng + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        spike_rng: &mut S,
+        v: Vector3<f64>,
+    ) -> DvlOutcome {
         if self.dropout_left > 0 {
             self.dropout_left -= 1;
             return DvlOutcome::Dropout;
@@ -190,17 +199,17 @@ impl DvlNoise {
                 sigma * std_normal(rng),
                 sigma * std_normal(rng),
             );
-        if chance(rng, self.spec.spike_probability) {
-            let axis = if chance(rng, self.spec.spike_surge_fraction) {
+        if chance(spike_rng, self.spec.spike_probability) {
+            let axis = if chance(spike_rng, self.spec.spike_surge_fraction) {
                 0
-            } else if chance(rng, 0.5) {
+            } else if chance(spike_rng, 0.5) {
                 1
             } else {
                 2
             };
             let [lo, hi] = self.spec.spike_magnitude;
-            let a = uniform(rng, lo, hi);
-            m[axis] += if chance(rng, 0.5) { a } else { -a };
+            let a = uniform(spike_rng, lo, hi);
+            m[axis] += if chance(spike_rng, 0.5) { a } else { -a };
             DvlOutcome::Spike { velocity: m, axis }
         } else {
             DvlOutcome::Valid(m)

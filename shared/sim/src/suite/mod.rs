@@ -89,6 +89,8 @@ mod stream {
     pub const MODEM: u64 = 9;
     pub const BUOY: u64 = 10;
     pub const LBL: u64 = 11;
+    /// DVL spikes apart from the DVL's noise (a spike-free run differs only by its spikes).
+    pub const DVL_SPIKE: u64 = 12;
 }
 
 fn sensor_rng(seed: u64, stream: u64) -> ChaCha8Rng {
@@ -211,6 +213,7 @@ struct DvlState {
     schedule: Schedule,
     noise: DvlNoise,
     rng: ChaCha8Rng,
+    spike_rng: ChaCha8Rng,
 }
 
 #[derive(Debug, Clone)]
@@ -320,6 +323,7 @@ impl SensorSuite {
                 schedule: Schedule::new(config.dvl.rate_hz),
                 noise: DvlNoise::new(config.dvl.noise, &mut rng)?,
                 rng,
+                spike_rng: sensor_rng(seed, stream::DVL_SPIKE),
             })
         } else {
             None
@@ -516,7 +520,7 @@ impl SensorSuite {
             let v_body = truth.q_nb.inverse_transform_vector(&truth.v_ned_m_s);
             let in_range = altitude >= d.min_altitude_m && altitude <= d.max_altitude_m;
             let (event, velocity) = if in_range {
-                match s.noise.next(&mut s.rng, v_body) {
+                match s.noise.next(&mut s.rng, &mut s.spike_rng, v_body) {
                     DvlOutcome::Valid(v) => (DvlEvent::Valid, Some(v)),
                     DvlOutcome::Spike { velocity, axis } => {
                         (DvlEvent::Spike { axis }, Some(velocity))

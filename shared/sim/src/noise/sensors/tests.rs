@@ -28,13 +28,14 @@ fn dvl_noise_spikes_and_dropouts() {
     let spec = DvlSpec::default();
     let mut r = rng(5);
     let mut dvl = DvlNoise::new(spec, &mut r).expect("spec");
+    let mut spikes_rng = rng(55);
     let v = Vector3::new(1.5, -0.1, 0.05);
     let expected = v * (1.0 + dvl.scale_factor_error());
     let n = 2_200_000;
     let (mut valid, mut spikes, mut drops, mut surge) = (0usize, 0usize, 0usize, 0usize);
     let mut resid_x = Vec::new();
     for _ in 0..n {
-        match dvl.next(&mut r, v) {
+        match dvl.next(&mut r, &mut spikes_rng, v) {
             DvlOutcome::Valid(m) => {
                 valid += 1;
                 if resid_x.len() < 200_000 {
@@ -72,6 +73,49 @@ fn dvl_noise_spikes_and_dropouts() {
         rel(f, spec.spike_surge_fraction).abs() < 0.10,
         "surge share {f}"
     );
+}
+
+/// Paper 002 Fig. 5's comparison needs runs that differ by their spikes
+/// only: with spikes switched off, every other sample is the same, bit for
+/// bit, and the spiked ones differ on one axis.
+#[test]
+fn a_spike_free_dvl_differs_only_by_its_spikes() {
+    let run = |spike_probability: f64| {
+        let spec = DvlSpec {
+            spike_probability,
+            ..DvlSpec::default()
+        };
+        let mut r = rng(9);
+        let mut s = rng(99);
+        let mut d = DvlNoise::new(spec, &mut r).expect("spec");
+        (0..200_000)
+            .map(|k| {
+                d.next(
+                    &mut r,
+                    &mut s,
+                    Vector3::new(1.5, 0.1 * (k as f64).sin(), 0.0),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let (spiky, clean) = (run(0.01), run(0.0));
+    let mut spikes = 0;
+    for (a, b) in spiky.iter().zip(&clean) {
+        match (a, b) {
+            (DvlOutcome::Spike { velocity, axis }, DvlOutcome::Valid(v)) => {
+                spikes += 1;
+                for i in 0..3 {
+                    if i == *axis {
+                        assert!((velocity[i] - v[i]).abs() >= 0.5, "spike too small");
+                    } else {
+                        assert_eq!(velocity[i], v[i]);
+                    }
+                }
+            }
+            (a, b) => assert_eq!(a, b, "a sample without a spike differs"),
+        }
+    }
+    assert!(spikes > 1000, "{spikes} spikes");
 }
 
 #[test]
@@ -221,8 +265,12 @@ fn same_seed_same_series_other_seed_differs() {
     fn dvl(seed: u64) -> Vec<Option<Vector3<f64>>> {
         let mut r = rng(seed);
         let mut d = DvlNoise::new(DvlSpec::default(), &mut r).expect("spec");
+        let mut s = rng(seed + 1000);
         (0..5000)
-            .map(|_| d.next(&mut r, Vector3::new(1.0, 0.0, 0.0)).velocity())
+            .map(|_| {
+                d.next(&mut r, &mut s, Vector3::new(1.0, 0.0, 0.0))
+                    .velocity()
+            })
             .collect()
     }
     fn lbl(seed: u64) -> Vec<LblOutcome> {
