@@ -521,6 +521,19 @@ pub fn start_launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> R
     )
 }
 
+/// [`start_launch_manifest`] with an explicit gate share (`None` for a test
+/// that holds the gate closed: a kill -9 test, whose killed publisher's
+/// shared memory another launch starting meanwhile would reclaim before this
+/// run's consumers have read it).
+pub fn start_launch_manifest_with(
+    wd: &Watchdog,
+    manifest: &Path,
+    args: &[&str],
+    gate: Option<Shared>,
+) -> Running {
+    Running::spawn(wd, &bin("nauta"), &launch_args(manifest, args), gate)
+}
+
 /// Runs `nauta launch <manifest> --json <args>` to its end, sharing the launch gate.
 pub fn launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> Finished {
     start_launch_manifest(wd, manifest, args).wait(wd)

@@ -119,7 +119,11 @@ fn kill_9_and_swap_of_the_ains_keep_every_stamp_exactly_once() {
         _inbox: inbox,
         seen: Vec::new(),
     };
-    let mut launch = start_launch_manifest(
+    // No other launch of this test process meanwhile: one starting after the
+    // kill would reclaim the killed ains's shared memory (every launch cleans
+    // up dead nodes) before this test has read its last solutions.
+    let _alone = Gate::close();
+    let mut launch = start_launch_manifest_with(
         &wd,
         &dr_manifest(),
         &[
@@ -132,6 +136,7 @@ fn kill_9_and_swap_of_the_ains_keep_every_stamp_exactly_once() {
             "--namespace",
             ns.as_str(),
         ],
+        None,
     );
     // Past a few snapshots (one per second of the run's clock).
     f.until(&wd, &mut launch, 0, 15_000_000_000);

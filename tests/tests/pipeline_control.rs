@@ -324,11 +324,12 @@ fn status_restart_swap_and_stop_from_another_shell() {
 fn chaos_short_version() {
     bin_dir();
     let wd = Watchdog::new("chaos_short", BOUND);
-    // The benchmark launches a run: it shares the launch gate like every
-    // launch, so a test that closed the gate (and then launches, cleaning up
-    // every dead node on the machine) cannot remove a killed estimator's
-    // shared memory before this run's launcher has drained it.
-    let _gate = Gate::share();
+    // The benchmark kills estimators: no other launch of this test process
+    // may start meanwhile, since every launch cleans up the dead nodes on the
+    // machine and would remove a killed estimator's shared memory before this
+    // run's launcher has drained it (seen: 17-283 stamps lost when the other
+    // tests of this file launched during the kills).
+    let _alone = Gate::close();
     let (code, out, err) = {
         let child = std::process::Command::new(bin("nauta"))
             .current_dir(workspace_root())
