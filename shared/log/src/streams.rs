@@ -1,6 +1,6 @@
 //! A recording as typed, checked streams: one [`Stream`] per channel of a
 //! type [`crate::checked`] knows, its values in file order with the times the
-//! logger saw, and what was rejected counted with the first reason. The one
+//! logger saw, and each message it rejected with the reason. The one
 //! reader offline tools use ([`visit`] message by message, for tools that
 //! keep little, such as the map exports; [`Streams::read`] to hold them).
 
@@ -63,22 +63,34 @@ impl<T> Stream<T> {
     }
 }
 
-/// A stream of any of the known types.
+/// A stream of any of the known types (the variants of [`Value`]).
 #[derive(Debug, Clone, PartialEq)]
-#[allow(missing_docs)]
 pub enum AnyStream {
+    /// `nauta.ImuSample.v1`.
     Imu(Stream<checked_types::Imu>),
+    /// `nauta.DepthSample.v1`.
     Depth(Stream<checked_types::Depth>),
+    /// `nauta.DvlSample.v1`.
     Dvl(Stream<checked_types::Dvl>),
+    /// `nauta.GpsFix.v1`.
     Gps(Stream<checked_types::Gps>),
+    /// `nauta.AhrsSample.v1`.
     Ahrs(Stream<checked_types::Ahrs>),
+    /// `nauta.PropellerSample.v1`.
     Propeller(Stream<checked_types::Propeller>),
+    /// `nauta.BuoyRange.v1`.
     Buoy(Stream<checked_types::BuoyRangeReading>),
+    /// `nauta.LblReply.v1`.
     LblReply(Stream<checked_types::LblReplyReading>),
+    /// `nauta.TruthState.v1`.
     Truth(Stream<checked_types::Truth>),
+    /// `nauta.AttitudeEstimate.v1`.
     Attitude(Stream<checked_types::Attitude>),
+    /// `nauta.NavSolution.v1`.
     Nav(Stream<checked_types::Nav>),
+    /// `nauta.PositionFix.v1`.
     Fix(Stream<checked_types::Fix>),
+    /// `nauta.LblSolution.v1`.
     Lbl(Stream<checked_types::LblNav>),
 }
 
