@@ -14,6 +14,7 @@
 
 pub mod compute;
 pub mod data;
+pub mod dives;
 pub mod live;
 
 use std::collections::BTreeMap;
@@ -105,10 +106,28 @@ pub fn evaluate(file: &Path, data: &Data) -> anyhow::Result<Evaluation> {
             }
             Reference::Gps => compute::errors_against_gps(stream, &data.gps, frame),
         };
-        eval.streams.insert(
-            topic.clone(),
-            compute::metrics(&errors, unmatched, stream.rejected),
-        );
+        let mut metrics = compute::metrics(&errors, unmatched, stream.rejected);
+        if reference == Reference::Truth && stream.kind.has_position() {
+            let predicted = |t: u64| {
+                let i = stream.samples.partition_point(|s| s.stamp_ns < t);
+                stream.samples.get(i).and_then(|s| s.predicted_drift_m)
+            };
+            let d = dives::dives(&errors, &data.gps, predicted);
+            if !d.is_empty() {
+                let mean =
+                    |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+                metrics.dive_error_pct = mean(d.iter().filter_map(|d| d.error_pct).collect());
+                metrics.dive_drift_m_per_km = mean(
+                    d.iter()
+                        .filter(|d| d.error_pct.is_some())
+                        .map(|d| d.error_m / (d.distance_m / 1000.0))
+                        .collect(),
+                );
+                metrics.drift_slope_m_per_km = dives::drift_slope(&errors, &d);
+                metrics.dives = Some(d);
+            }
+        }
+        eval.streams.insert(topic.clone(), metrics);
         eval.series.insert(topic.clone(), errors);
     }
     Ok(eval)

@@ -125,6 +125,19 @@ pub struct Metrics {
     /// Matched samples that carried a usable covariance.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub covariance_samples: Option<u64>,
+    /// Paper 002's dives (against the truth, between surface GPS fixes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dives: Option<Vec<super::dives::Dive>>,
+    /// Mean over the dives of `error_pct`, %.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dive_error_pct: Option<f64>,
+    /// Mean over the dives of the error per km travelled submerged, m/km.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dive_drift_m_per_km: Option<f64>,
+    /// Paper 000's per-axis drift: slope of the north, east and down error
+    /// against the distance travelled submerged, m/km.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_slope_m_per_km: Option<[f64; 3]>,
 }
 
 /// The frame a `lbl/nav`-like (local) stream is compared in.
@@ -305,6 +318,10 @@ pub fn estimate_at(samples: &[EstimateSample], t: u64) -> Option<EstimateSample>
                 cov_ne_m2: a.cov_ne_m2.zip(b.cov_ne_m2).map(|(x, y)| x + (y - x) * f),
                 att_std_rad: a.att_std_rad.zip(b.att_std_rad).map(|(x, y)| x.lerp(&y, f)),
                 innovation: a.innovation,
+                predicted_drift_m: a
+                    .predicted_drift_m
+                    .zip(b.predicted_drift_m)
+                    .map(|(x, y)| lerp(x, y, f)),
             })
         }
     }

@@ -92,6 +92,9 @@ pub struct EstimateSample {
     pub att_std_rad: Option<Vector3<f64>>,
     /// LBL: the last range innovation.
     pub innovation: Option<Innovation>,
+    /// The estimate's own predicted horizontal error (`ains/nav`'s
+    /// `predicted_drift_m`, paper 002), m.
+    pub predicted_drift_m: Option<f64>,
 }
 
 /// An estimate stream.
@@ -322,6 +325,7 @@ pub(crate) fn empty(stamp_ns: u64) -> EstimateSample {
         cov_ne_m2: None,
         att_std_rad: None,
         innovation: None,
+        predicted_drift_m: None,
     }
 }
 
@@ -344,6 +348,7 @@ fn nav(m: &Nav) -> EstimateSample {
         vel_ned_m_s: Some(m.vel_ned_m_s.to_nalgebra()),
         attitude: m.attitude.map(|q| q.to_nalgebra()),
         cov_ne_m2: cov_ne(m.pos_std_ned_m.x(), m.pos_std_ned_m.y(), 0.0),
+        predicted_drift_m: Some(m.predicted_drift_m),
         ..empty(m.stamp_ns)
     }
 }
