@@ -513,12 +513,7 @@ pub fn launch(wd: &Watchdog, args: &[&str]) -> Finished {
 
 /// Starts `nauta launch <manifest> --json <args>`, sharing the launch gate.
 pub fn start_launch_manifest(wd: &Watchdog, manifest: &Path, args: &[&str]) -> Running {
-    Running::spawn(
-        wd,
-        &bin("nauta"),
-        &launch_args(manifest, args),
-        Some(Gate::share()),
-    )
+    start_launch_manifest_with(wd, manifest, args, Some(Gate::share()))
 }
 
 /// [`start_launch_manifest`] with an explicit gate share (`None` for a test

@@ -45,23 +45,6 @@ pub enum Value {
     Lbl(LblNav),
 }
 
-/// The type names [`decode`] knows, in the order of [`Value`]'s variants.
-pub const TYPE_NAMES: [&str; 13] = [
-    ImuSample::TYPE_NAME,
-    DepthSample::TYPE_NAME,
-    DvlSample::TYPE_NAME,
-    GpsFix::TYPE_NAME,
-    AhrsSample::TYPE_NAME,
-    PropellerSample::TYPE_NAME,
-    BuoyRange::TYPE_NAME,
-    LblReply::TYPE_NAME,
-    TruthState::TYPE_NAME,
-    AttitudeEstimate::TYPE_NAME,
-    NavSolution::TYPE_NAME,
-    PositionFix::TYPE_NAME,
-    LblSolution::TYPE_NAME,
-];
-
 /// Why a message of a known type gave no value.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Rejection {

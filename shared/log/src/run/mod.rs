@@ -150,7 +150,6 @@ impl RunInfo {
         presets: Option<Resolver>,
     ) -> RunInfo {
         let mut notes = Vec::new();
-        let notes = &mut notes;
         let empty = BTreeMap::new();
         let meta = meta.unwrap_or(&empty);
         let docs: Vec<(&str, Value)> = meta
@@ -164,7 +163,7 @@ impl RunInfo {
                 value: o,
                 source: "--origin".to_owned(),
             }),
-            None => recorded_origin(&num, &docs, notes),
+            None => recorded_origin(&num, &docs, &mut notes),
         };
 
         let presets = presets
@@ -204,7 +203,7 @@ impl RunInfo {
             sound_speed_m_s,
             turnaround_s,
             utc_start,
-            notes: std::mem::take(notes),
+            notes,
         }
     }
 

@@ -191,7 +191,7 @@ impl Data {
         let rec = nauta_log::streams::visit(
             path,
             on_progress,
-            |_| true,
+            |ch| reads(&ch.type_name),
             |m| {
                 d.first_stamp_ns = d.first_stamp_ns.min(m.recorded.publish_time_ns);
                 if let Some(checked) = m.checked {
@@ -224,6 +224,9 @@ impl Data {
     /// Takes one message's bytes (a live tap); what fails to decode or
     /// check is counted.
     pub fn take(&mut self, topic: &str, type_name: &str, data: &[u8]) {
+        if !reads(type_name) {
+            return;
+        }
         if let Some(checked) = logged::decode(type_name, data) {
             self.take_checked(topic, type_name, &checked);
         }
@@ -278,6 +281,20 @@ impl Data {
     pub fn t_s(&self, stamp_ns: u64) -> f64 {
         (stamp_ns as f64 - self.first_stamp_ns as f64) * 1e-9
     }
+}
+
+/// The types eval uses: the estimates and the references (the sensors'
+/// other channels, the bulk of a recording, are not decoded).
+fn reads(type_name: &str) -> bool {
+    use nauta_messages::{BuoyRange, GpsFix, LblReply, TruthState};
+    StreamKind::of(type_name).is_some()
+        || [
+            TruthState::TYPE_NAME,
+            GpsFix::TYPE_NAME,
+            LblReply::TYPE_NAME,
+            BuoyRange::TYPE_NAME,
+        ]
+        .contains(&type_name)
 }
 
 /// The reference channels whose rejections eval reports.
