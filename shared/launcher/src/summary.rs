@@ -32,8 +32,14 @@ pub struct RunSummary {
     /// Messages received by the launcher on the data services (those of
     /// `streams`).
     pub messages: u64,
-    /// Sequence gaps seen by the launcher's taps, on every service.
+    /// Sequence gaps seen by the launcher's taps on the data services (those
+    /// of `streams`), and on the progress services in `sim` clock, where
+    /// watermarks are lossless. Health and snapshot messages, and watermarks
+    /// in `wall`, are states, each superseding the one before: one the
+    /// launcher missed while busy is no loss, and is not counted.
     pub gaps: u64,
+    /// The services of `gaps`, those with any.
+    pub gaps_by_service: BTreeMap<String, u64>,
     /// Messages lost inside the processes: input gaps and deliveries given up
     /// by publishers, as each instance's last health counted them.
     pub lost: u64,
@@ -232,6 +238,9 @@ impl RunSummary {
                 (t.service().to_owned(), stats)
             })
             .collect();
+        let lossless = manifest.clock().is_lossless();
+        let counts_gaps =
+            |service: &str| is_data(service) || (lossless && service.ends_with("/progress"));
         let (lost, rejected) = obs.process_losses();
         let per_member = |n: fn(&crate::supervisor::Member) -> u32| {
             sup.members
@@ -255,7 +264,16 @@ impl RunSummary {
             mission_s,
             wall_s: wall.as_secs_f64(),
             messages: streams.values().map(|s| s.messages).sum(),
-            gaps: taps.iter().map(|t| t.gaps()).sum(),
+            gaps: taps
+                .iter()
+                .filter(|t| counts_gaps(t.service()))
+                .map(|t| t.gaps())
+                .sum(),
+            gaps_by_service: taps
+                .iter()
+                .filter(|t| counts_gaps(t.service()) && t.gaps() > 0)
+                .map(|t| (t.service().to_owned(), t.gaps()))
+                .collect(),
             lost,
             rejected,
             streams,
@@ -302,6 +320,9 @@ impl RunSummary {
             ));
         }
         parts.push(format!("gaps {}", self.gaps));
+        for (s, n) in &self.gaps_by_service {
+            parts.push(format!("{s} gaps {n}"));
+        }
         parts.push(format!(
             "lost in processes {}, rejected {}",
             self.lost, self.rejected
