@@ -358,3 +358,35 @@ fn the_files_of_a_running_pipeline_are_private() {
     assert_eq!(out.code(), Some(0), "{out}");
     assert_eq!(out.summary().restarts("attitude"), 1, "{out}");
 }
+
+/// A restrictive umask (0177, as some hardened accounts set) took the
+/// execute bit off a new run directory, which the launcher then refused as
+/// not private ("its mode is 0600"): a run must start whatever the umask.
+#[test]
+fn a_restrictive_umask_does_not_make_the_launcher_refuse_its_own_run_directory() {
+    bin_dir();
+    let _wd = Watchdog::new("umask_0177", BOUND);
+    let tmp = scratch("umask");
+    let ns = Namespace::unique();
+    let script = format!(
+        "umask 177 && exec '{}' launch '{}' --duration 2 --fast --namespace {}",
+        bin("nauta").display(),
+        survey_manifest().display(),
+        ns.as_str()
+    );
+    let out = Command::new("sh")
+        .args(["-c", &script])
+        .current_dir(workspace_root())
+        .env_remove("XDG_RUNTIME_DIR")
+        .env("TMPDIR", &tmp)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run sh");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "the run failed under umask 0177\n{err}"
+    );
+    let _ = std::fs::remove_dir_all(&tmp);
+}

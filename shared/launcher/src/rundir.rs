@@ -77,7 +77,12 @@ pub fn claim_run_dir(namespace: &Namespace) -> anyhow::Result<(PathBuf, std::fs:
     for attempt in 0..2 {
         match std::fs::DirBuilder::new().mode(0o700).create(&dir) {
             Ok(()) => {
-                run_files::private_dir(&dir)?;
+                // Created here: exactly 0700 whatever the umask removed (a
+                // umask such as 0177 would leave 0600, which the check below
+                // refuses).
+                std::fs::set_permissions(&dir, std::os::unix::fs::PermissionsExt::from_mode(0o700))
+                    .with_context(|| format!("cannot set the mode of {}", dir.display()))?;
+                run_files::check_private_dir(&dir)?;
                 let file = run_files::create_new(&lock)?;
                 if !try_lock(&file) {
                     return Err(in_use());
