@@ -2,11 +2,11 @@
 //! [`AinsCore`] (in `nauta-estimation`: the `dr` variant, paper 002's dead
 //! reckoning, so far), its lifecycle the runtime's estimator shell.
 //!
-//! Inputs in the order of [`AinsInput`] (ties at one stamp are taken in this
-//! order): IMU, DVL, depth, GPS, AHRS, all from the sensor. The AHRS and the
-//! DVL trigger outputs (`ains/nav`); the others only correct the state.
-//! `attitude/estimate` and `positioning/fix` join when the variants that use
-//! them do.
+//! Inputs (ties at one stamp are taken in this order): IMU, DVL, depth, GPS,
+//! AHRS from the sensor, then `attitude/estimate` and `positioning/fix`, both
+//! optional (a run without an attitude or a positioning process runs without
+//! them: the launcher passes `--absent`). The AHRS and the DVL trigger
+//! outputs (`ains/nav`); the others only correct the state.
 
 use std::process::ExitCode;
 
@@ -34,6 +34,12 @@ fn main() -> ExitCode {
         .aiding(services::depth(), Role::Sensor, AinsInput::Depth)
         .aiding(services::gps(), Role::Sensor, AinsInput::Gps)
         .input(services::ahrs(), Role::Sensor, AinsInput::Ahrs)
+        .optional_aiding(
+            services::attitude_estimate(),
+            Role::Attitude,
+            AinsInput::Attitude,
+        )
+        .optional_aiding(services::position_fix(), Role::Positioning, AinsInput::Fix)
         .output(services::nav_solution(), |n| Some(NavSolution::from(n)))
         .snapshot(
             services::snapshot(Role::Ains),

@@ -76,6 +76,9 @@ struct Proc {
     name: String,
     bin: PathBuf,
     describe: Describe,
+    /// Its optional inputs that no process of the run publishes (passed as
+    /// `--absent SERVICE`).
+    absent: Vec<String>,
 }
 
 impl Proc {
@@ -200,9 +203,23 @@ pub fn prepare(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<P
             name: name.clone(),
             bin,
             describe,
+            absent: Vec::new(),
         });
     }
     check_wiring(&manifest, &procs)?;
+    let published: std::collections::BTreeSet<String> = procs
+        .iter()
+        .flat_map(|p| p.describe.outputs.iter().map(|o| o.service.clone()))
+        .collect();
+    for p in &mut procs {
+        p.absent = p
+            .describe
+            .inputs
+            .iter()
+            .filter(|i| i.optional && !published.contains(&i.service))
+            .map(|i| i.service.clone())
+            .collect();
+    }
     check_roles(&manifest, &procs)?;
     check_parameters(&manifest, &procs)?;
     // Sources first (in standby: see docs/design-notes.md), then consumers,
@@ -410,12 +427,16 @@ fn run_to_summary(args: &LaunchArgs) -> anyhow::Result<RunSummary> {
                 let before: Vec<String> = sup.members.iter().map(|m| m.name.clone()).collect();
                 wait_ready(&ctx, &mut events, &mut sup, &mut ready, &before)?;
             }
+            let mut args = section.args.clone();
+            for s in &p.absent {
+                args.extend(["--absent".to_owned(), s.clone()]);
+            }
             sup.start(
                 &p.name,
                 &p.bin,
                 &p.describe,
                 section.variant.as_deref(),
-                &section.args,
+                &args,
                 Restart::from_section(section.restart.as_ref()),
             )?;
         }

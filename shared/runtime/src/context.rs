@@ -68,6 +68,8 @@ pub struct Context {
     pub snapshot_file: Option<std::path::PathBuf>,
     /// Publish nothing stamped at or before this (`--resume-after`).
     pub resume_after_ns: Option<u64>,
+    /// Optional inputs nobody publishes in this run (`--absent`).
+    pub absent: Vec<String>,
     /// The manifest, when started from one.
     pub manifest: Option<Manifest>,
     /// Back-pressure deadline in `sim` mode.
@@ -125,6 +127,7 @@ impl Context {
         ctx.standby = args.standby;
         ctx.snapshot_file = args.snapshot.clone();
         ctx.resume_after_ns = args.resume_after;
+        ctx.absent = args.absent.clone();
         ctx.manifest = Some(manifest);
         Ok(ctx)
     }
@@ -151,6 +154,7 @@ impl Context {
             standby: false,
             snapshot_file: None,
             resume_after_ns: None,
+            absent: Vec::new(),
             manifest: None,
             deadline: s.deadline,
             started: Instant::now(),
@@ -265,6 +269,8 @@ impl Context {
             config: self.config.clone(),
             seq: 0,
             pending: false,
+            unnotified: 0,
+            notify_every: (spec.buffer / 2).max(1),
             published: 0,
             given_up: 0,
             gave_up_flag: self.gave_up.clone(),

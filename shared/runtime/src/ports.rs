@@ -33,6 +33,10 @@ pub struct Publisher<M: Message> {
     pub(crate) config: Config,
     pub(crate) seq: u64,
     pub(crate) pending: bool,
+    /// Messages published since the last notification.
+    pub(crate) unnotified: usize,
+    /// Notify at the latest after this many: half a subscriber's queue.
+    pub(crate) notify_every: usize,
     pub(crate) published: u64,
     pub(crate) given_up: u64,
     pub(crate) gave_up_flag: Rc<Cell<bool>>,
@@ -77,6 +81,14 @@ impl<M: Message> Publisher<M> {
         self.seq += 1;
         self.published += 1;
         self.pending = true;
+        // A long batch wakes its subscribers before their queues can fill:
+        // in `sim` a publisher blocked on a full queue would otherwise wait
+        // for a subscriber that was never told to drain it, until the
+        // deadline gives the delivery up.
+        self.unnotified += 1;
+        if self.unnotified >= self.notify_every {
+            self.flush();
+        }
         match self.inner.send_copy(msg) {
             Ok(_) => Ok(()),
             Err(SendError::UnableToDeliver) => {
@@ -102,6 +114,7 @@ impl<M: Message> Publisher<M> {
     pub fn flush(&mut self) {
         if self.pending {
             self.pending = false;
+            self.unnotified = 0;
             if let Err(e) = self.notifier.notify() {
                 tracing::debug!(service = %self.name, error = ?e, "notify failed");
             }

@@ -40,6 +40,11 @@ pub struct ProcessArgs {
     /// duplicating outputs.
     #[arg(long, value_name = "STAMP_NS")]
     pub resume_after: Option<u64>,
+    /// An optional input (see `--describe`) that no process of the run
+    /// publishes: not subscribed to and never waited for. The launcher passes
+    /// one for each; without it the process waits for that input's publisher.
+    #[arg(long, value_name = "SERVICE")]
+    pub absent: Vec<String>,
     /// Print the input and output services and types as JSON and exit.
     #[arg(long)]
     pub describe: bool,

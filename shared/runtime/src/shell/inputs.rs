@@ -142,7 +142,7 @@ impl Watermarks {
     /// One per distinct publisher of `decls`, in order of first appearance.
     pub fn open<I>(
         ctx: &Context,
-        decls: &[InputDecl<I>],
+        decls: &[&InputDecl<I>],
     ) -> anyhow::Result<(Vec<Watermarks>, Vec<Inbox>)> {
         let mut by_role: BTreeMap<u32, usize> = BTreeMap::new();
         let (mut out, mut inboxes) = (Vec::<Watermarks>::new(), Vec::new());

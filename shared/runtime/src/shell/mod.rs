@@ -143,6 +143,28 @@ where
         s
     }
 
+    /// An optional aiding input: as [`Shell::aiding`], for an input the role
+    /// can run without (`positioning/fix` when no positioning runs). Its
+    /// `--describe` marks it optional; the launcher passes `--absent SERVICE`
+    /// when no process of the run publishes it, and the shell then neither
+    /// subscribes to it nor waits for its publisher's watermark.
+    pub fn optional_aiding<M, D>(
+        self,
+        spec: ServiceSpec<M>,
+        publisher: Role,
+        into: fn(D) -> E::Input,
+    ) -> Self
+    where
+        M: Message,
+        D: for<'a> TryFrom<&'a M, Error = ValidationError> + 'static,
+    {
+        let mut s = self.aiding(spec, publisher, into);
+        if let Some(last) = s.inputs.last_mut() {
+            last.port.optional = true;
+        }
+        s
+    }
+
     /// An output: the message `make` builds from an estimator output (`None`
     /// when that output is not for this service).
     pub fn output<M: Message>(
@@ -170,8 +192,19 @@ where
     pub fn describe(&self) -> Describe {
         let mut inputs: Vec<PortDescription> = self.inputs.iter().map(|i| i.port.clone()).collect();
         for i in &self.inputs {
-            let p = PortDescription::of(&services::progress(i.publisher));
-            if !inputs.contains(&p) {
+            // A publisher's watermarks are optional when every input it
+            // qualifies is.
+            let optional = self
+                .inputs
+                .iter()
+                .filter(|j| j.publisher == i.publisher)
+                .all(|j| j.port.optional);
+            let p = if optional {
+                PortDescription::optional(&services::progress(i.publisher))
+            } else {
+                PortDescription::of(&services::progress(i.publisher))
+            };
+            if !inputs.iter().any(|q| q.service == p.service) {
                 inputs.push(p);
             }
         }
@@ -234,14 +267,26 @@ where
                 Err(e) => tracing::warn!(error = %e, "snapshot unreadable; starting cold"),
             }
         }
-        let mut ports = Vec::with_capacity(self.inputs.len());
+        // The inputs of this run: an optional one nobody publishes is left out.
+        let decls: Vec<&InputDecl<E::Input>> = self
+            .inputs
+            .iter()
+            .filter(|d| {
+                let absent = d.port.optional && ctx.absent.contains(&d.port.service);
+                if absent {
+                    tracing::info!(service = %d.port.service, "optional input absent from this run");
+                }
+                !absent
+            })
+            .collect();
+        let mut ports = Vec::with_capacity(decls.len());
         let mut inboxes = Vec::new();
-        for d in &self.inputs {
+        for d in &decls {
             let (p, inbox) = (d.open)(ctx)?;
             ports.push(p);
             inboxes.push(inbox);
         }
-        let (mut marks, mark_inboxes) = Watermarks::open(ctx, &self.inputs)?;
+        let (mut marks, mark_inboxes) = Watermarks::open(ctx, &decls)?;
         inboxes.extend(mark_inboxes);
         let mut outs = self
             .outputs
@@ -267,7 +312,7 @@ where
         let mut run = Run {
             life: Lifecycle::estimator(ctx),
             merge: OrderedMerge::strictly_increasing(ports.len()),
-            triggers: self.inputs.iter().map(|d| d.triggers).collect(),
+            triggers: decls.iter().map(|d| d.triggers).collect(),
             last_stamp: 0,
             last_published: None,
             next_snapshot_ns: 0,
@@ -331,7 +376,7 @@ where
                     tracing::debug!(publisher = m.publisher.name(), "input ended");
                 }
             }
-            run.process(&mut core, &mut outs, &mut snapshot_out, &mut health, &self.inputs)?;
+            run.process(&mut core, &mut outs, &mut snapshot_out, &mut health, &decls)?;
             for o in outs.iter_mut() {
                 o.flush();
             }
@@ -416,7 +461,7 @@ impl<E: Estimator> Run<E> {
         outs: &mut [Box<dyn OutputPort<E::Output>>],
         snapshot_out: &mut Option<Box<dyn SnapshotPort<E::Snapshot>>>,
         health: &mut HealthReporter,
-        decls: &[InputDecl<E::Input>],
+        decls: &[&InputDecl<E::Input>],
     ) -> anyhow::Result<()> {
         while let Some((idx, stamp, input)) = self.merge.pop() {
             self.last_stamp = stamp;

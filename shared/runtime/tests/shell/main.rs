@@ -218,3 +218,55 @@ fn a_wiring_cycle_runs_deterministically_without_a_round_trip_per_sample() {
         "the cycle's outputs differ from the in-process order",
     );
 }
+
+#[test]
+fn an_absent_optional_input_is_neither_subscribed_nor_waited_for() {
+    let _wd = Watchdog::new("optional input", Duration::from_secs(120));
+    let d = optionally_relayed_tracker_shell().describe();
+    let optional: Vec<(&str, bool)> = d
+        .inputs
+        .iter()
+        .map(|p| (p.service.as_str(), p.optional))
+        .collect();
+    assert_eq!(
+        optional,
+        vec![
+            ("sensor/imu", false),
+            ("sensor/depth", false),
+            ("lbl/nav", true),
+            ("sensor/progress", false),
+            ("lbl/progress", true),
+        ],
+        "--describe marks the optional input and its publisher's watermarks"
+    );
+    // No relay runs: told so, the tracker runs as if it had no such input
+    // (without `--absent` it would wait for the relay's publisher).
+    let data = samples(20, 5);
+    let ns = Namespace::unique();
+    let (col, col_ready) = collector(&ns, 0, &Arc::default());
+    col_ready.recv().expect("collector started");
+    let src = source(
+        ns.clone(),
+        data.clone(),
+        Arrival::InOrder,
+        vec!["tracker", "collector"],
+        None,
+    );
+    let trk = role(
+        &ns,
+        optionally_relayed_tracker_shell,
+        Tracker::cold(),
+        Role::Ains,
+        "tracker",
+        0,
+        |ctx| ctx.absent = vec!["lbl/nav".into()],
+    );
+    join(src, "source");
+    join(trk, "tracker");
+    let got = join(col, "collector");
+    assert_same(
+        &outputs(&got.nav),
+        &reference(&data),
+        "outputs differ from the tracker without the optional input",
+    );
+}

@@ -235,3 +235,14 @@ pub fn relay_shell() -> Shell<Relay> {
         .aiding(services::nav_solution(), Role::Ains, RelayIn::Tracked)
         .output(services::lbl_solution(), lbl_of)
 }
+
+/// The tracker with the relay's output as an optional aiding input: a run
+/// without a relay passes `--absent lbl/nav`.
+pub fn optionally_relayed_tracker_shell() -> Shell<Tracker> {
+    Shell::<Tracker>::new(Role::Ains, &["kf"])
+        .input(services::imu(), Role::Sensor, TrackIn::Velocity)
+        .aiding(services::depth(), Role::Sensor, TrackIn::Position)
+        .optional_aiding(services::lbl_solution(), Role::Lbl, TrackIn::Relayed)
+        .output(services::nav_solution(), nav_of)
+        .snapshot(services::snapshot(Role::Ains), snapshot_of, state_of)
+}
