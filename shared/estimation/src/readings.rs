@@ -64,6 +64,9 @@ pub struct Gps {
     pub horizontal_std_m: f64,
     /// Fix quality code.
     pub quality: u32,
+    /// Velocity over ground, NED, m/s, and its standard deviation per axis,
+    /// m/s, when the receiver reports one (`nauta.GpsFix.v2`; none from v1).
+    pub velocity: Option<(Vector<Ned>, f64)>,
 }
 
 /// A checked vendor AHRS sample.

@@ -253,6 +253,7 @@ impl TryFrom<&GpsFix> for Gps {
             height_m: scalar(T, "height_m", m.height_m, -1000.0, 10_000.0)?,
             horizontal_std_m: scalar(T, "horizontal_std_m", m.horizontal_std_m, 0.0, 10_000.0)?,
             quality: m.quality,
+            velocity: None,
         })
     }
 }

@@ -183,6 +183,7 @@ mod tests {
                     height_m: 0.0,
                     horizontal_std_m: 2.0,
                     quality: 1,
+                    velocity: None,
                 }));
             }
             inputs.sort_by_key(|i| i.stamp_ns());

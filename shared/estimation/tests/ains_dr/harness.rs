@@ -83,6 +83,7 @@ pub fn inputs(m: &Measurements, out: &mut Vec<AinsInput>) {
             height_m: r.height_m,
             horizontal_std_m: r.horizontal_std_m,
             quality: r.quality,
+            velocity: None,
         }));
     }
     if let Some(r) = &m.ahrs {

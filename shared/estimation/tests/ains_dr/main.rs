@@ -100,6 +100,7 @@ fn gps(t_s: f64, lat_rad: f64, lon_rad: f64) -> AinsInput {
         height_m: 0.0,
         horizontal_std_m: 2.5,
         quality: 1,
+        velocity: None,
     })
 }
 
@@ -446,6 +447,7 @@ fn bad_input_is_refused_and_the_state_kept() {
         (
             AinsInput::Gps(Gps {
                 quality: 0,
+                velocity: None,
                 ..match gps(0.3, SITE.lat_rad, SITE.lon_rad) {
                     AinsInput::Gps(g) => g,
                     _ => unreachable!(),

@@ -120,6 +120,7 @@ mod tests {
             height_m: 0.0,
             horizontal_std_m: 2.0,
             quality: 1,
+            velocity: None,
         }
     }
 

@@ -205,6 +205,7 @@ fn against_gps_the_estimate_is_interpolated_and_its_track_measured() {
             height_m: 0.0,
             horizontal_std_m: 1.0,
             quality: 1,
+            velocity: None,
         })
         .collect();
     let (errors, unmatched) = errors_against_gps(&stream(StreamKind::Fix, samples), &gps, None);
