@@ -75,6 +75,10 @@ fn mission() -> &'static Mission {
                     horizontal_std_m: f.horizontal_std_m,
                     quality: f.quality,
                     satellites: f.satellites,
+                    vel_ned_m_s: f.vel_ned_m_s,
+                    vel_std_m_s: f.vel_std_m_s,
+                    velocity_valid: 1,
+                    pad: 0,
                 });
             }
         }
@@ -306,6 +310,7 @@ fn write(path: &Path, c: Contents) {
                 horizontal_std_m: 2.5,
                 quality: 1,
                 satellites: 9,
+                ..Default::default()
             };
             w.write_message(GPS_SERVICE, log_time(s), &g).expect("gps");
         }

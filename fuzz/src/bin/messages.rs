@@ -57,7 +57,8 @@ fn main() {
         }
         registry::visit_all(&mut DecodeAll(bytes));
         for service in SensorMessage::SERVICES {
-            let _ = SensorMessage::decode(service, bytes);
+            let _ = SensorMessage::decode(service, "", bytes);
         }
+        let _ = SensorMessage::decode(GPS_SERVICE, GpsFixV1::TYPE_NAME, bytes);
     });
 }

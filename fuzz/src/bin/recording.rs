@@ -28,7 +28,7 @@ fn main() {
             data,
             |_, _| {},
             |ch, m| {
-                let _ = nauta_messages::SensorMessage::decode(&ch.topic, m.data);
+                let _ = nauta_messages::SensorMessage::decode(&ch.topic, &ch.type_name, m.data);
                 let _ = nauta_log::header_of(m.data);
                 Ok(())
             },

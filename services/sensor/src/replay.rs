@@ -28,7 +28,7 @@ pub fn load(path: &Path) -> anyhow::Result<Replay> {
     let mut tagged: Vec<(u64, usize, SensorMessage)> = Vec::new();
     let mut bad = 0u64;
     let rec = nauta_log::read(path, |ch, m| {
-        match SensorMessage::decode(&ch.topic, m.data) {
+        match SensorMessage::decode(&ch.topic, &ch.type_name, m.data) {
             Some(Ok(msg)) => tagged.push((msg.header().stamp_ns, msg.order(), msg)),
             Some(Err(e)) => {
                 bad += 1;

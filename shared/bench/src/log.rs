@@ -112,7 +112,7 @@ fn read(path: &std::path::Path) -> anyhow::Result<(f64, u64)> {
         if ch.topic == ATTITUDE_ESTIMATE_SERVICE {
             codec::decode::<AttitudeEstimate>(m.data)?;
         } else {
-            SensorMessage::decode(&ch.topic, m.data)
+            SensorMessage::decode(&ch.topic, &ch.type_name, m.data)
                 .with_context(|| format!("unexpected channel {}", ch.topic))??;
         }
         n += 1;

@@ -10,8 +10,8 @@ use nauta_messages::checked::{
     Propeller, Truth,
 };
 use nauta_messages::{
-    AhrsSample, AttitudeEstimate, BuoyRange, DepthSample, DvlSample, GpsFix, ImuSample, LblReply,
-    LblSolution, Message, NavSolution, PositionFix, PropellerSample, TruthState, codec,
+    AhrsSample, AttitudeEstimate, BuoyRange, DepthSample, DvlSample, GpsFix, GpsFixV1, ImuSample,
+    LblReply, LblSolution, Message, NavSolution, PositionFix, PropellerSample, TruthState, codec,
 };
 
 /// A checked value of one of the message types offline tools read.
@@ -88,6 +88,7 @@ pub fn decode(type_name: &str, data: &[u8]) -> Option<Result<Checked, Rejection>
         DepthSample::TYPE_NAME => check::<DepthSample, Depth>(data, Value::Depth),
         DvlSample::TYPE_NAME => check::<DvlSample, Dvl>(data, Value::Dvl),
         GpsFix::TYPE_NAME => check::<GpsFix, Gps>(data, Value::Gps),
+        GpsFixV1::TYPE_NAME => check::<GpsFixV1, Gps>(data, Value::Gps),
         AhrsSample::TYPE_NAME => check::<AhrsSample, Ahrs>(data, Value::Ahrs),
         PropellerSample::TYPE_NAME => check::<PropellerSample, Propeller>(data, Value::Propeller),
         BuoyRange::TYPE_NAME => check::<BuoyRange, BuoyRangeReading>(data, Value::Buoy),

@@ -116,6 +116,8 @@ macro_rules! kinds {
             fn for_type(type_name: &str, topic: &str) -> Option<Self> {
                 match type_name {
                     $(nauta_messages::$wire::TYPE_NAME => Some(AnyStream::$variant(Stream::new(topic))),)*
+                    // Fixes of recordings made before v2: the same stream.
+                    nauta_messages::GpsFixV1::TYPE_NAME => Some(AnyStream::Gps(Stream::new(topic))),
                     _ => None,
                 }
             }

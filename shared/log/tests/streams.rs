@@ -87,3 +87,75 @@ fn a_recording_reads_as_typed_checked_streams() {
     assert_eq!(s.by_topic.len(), 1);
     assert!(s.get::<Depth>("sensor/depth").is_some());
 }
+
+/// `nauta.GpsFix.v2` added the receiver's velocity: a recording made before
+/// it (v1 fixes on `sensor/gps`) still reads, for the offline tools and for
+/// a replay, as fixes without a velocity; a v2 fix keeps its velocity.
+#[test]
+fn gps_fixes_of_v1_recordings_read_as_fixes_without_a_velocity() {
+    use nauta_messages::checked::Gps;
+    let dir = tempfile::tempdir().expect("tmp");
+    let old_path = dir.path().join("old.mcap");
+    let mut w = LogWriter::create(&old_path, WriterOptions::default()).expect("create");
+    for i in 0..3u64 {
+        let old = GpsFixV1 {
+            header: Header::new(i * 1_000_000_000, i, Role::Sensor, 0),
+            lat_rad: 0.67,
+            lon_rad: -0.16,
+            horizontal_std_m: 2.5,
+            quality: 1,
+            satellites: 8,
+            ..Default::default()
+        };
+        w.write_message(GPS_SERVICE, 1_000 + i, &old)
+            .expect("write");
+    }
+    w.finish().expect("finish");
+    let new_path = dir.path().join("new.mcap");
+    let mut w = LogWriter::create(&new_path, WriterOptions::default()).expect("create");
+    let new = GpsFix {
+        header: Header::new(9_000_000_000, 0, Role::Sensor, 0),
+        lat_rad: 0.67,
+        lon_rad: -0.16,
+        horizontal_std_m: 2.5,
+        quality: 1,
+        vel_ned_m_s: [1.0, -0.5, 0.0],
+        vel_std_m_s: 0.05,
+        velocity_valid: 1,
+        ..Default::default()
+    };
+    w.write_message(GPS_SERVICE, 2_000, &new).expect("write");
+    w.finish().expect("finish");
+
+    let s = Streams::read(&old_path, &Select::All, None, |_, _| {}).expect("read");
+    let fixes = s
+        .get::<Gps>(GPS_SERVICE)
+        .expect("sensor/gps is a Gps stream");
+    assert_eq!(fixes.samples.len(), 3, "{:?}", fixes.rejected);
+    assert!(fixes.samples.iter().all(|f| f.value.velocity.is_none()
+        && f.value.lat_rad == 0.67
+        && f.value.horizontal_std_m == 2.5));
+    let s = Streams::read(&new_path, &Select::All, None, |_, _| {}).expect("read");
+    let fixes = s
+        .get::<Gps>(GPS_SERVICE)
+        .expect("sensor/gps is a Gps stream");
+    let (v, std) = fixes.samples[0].value.velocity.expect("the v2 velocity");
+    assert_eq!((v.to_array(), std), ([1.0, -0.5, 0.0], 0.05));
+
+    // What `nauta-sensor --from` replays: v2 fixes on the wire.
+    let mut replayed = Vec::new();
+    nauta_log::read(&old_path, |ch, m| {
+        if let Some(msg) = SensorMessage::decode(&ch.topic, &ch.type_name, m.data) {
+            replayed.push(msg?);
+        }
+        Ok(())
+    })
+    .expect("read");
+    assert_eq!(replayed.len(), 3);
+    match replayed[0] {
+        SensorMessage::Gps(g) => {
+            assert_eq!((g.velocity_valid, g.lat_rad, g.satellites), (0, 0.67, 8))
+        }
+        other => panic!("not a fix: {other:?}"),
+    }
+}

@@ -11,8 +11,8 @@ pub use nauta_estimation::readings::{
 };
 
 use crate::{
-    AhrsSample, AttitudeEstimate, BuoyRange, DepthSample, DvlSample, GpsFix, ImuSample, LblReply,
-    LblSolution, NavSolution, PositionFix, PropellerSample, TruthState,
+    AhrsSample, AttitudeEstimate, BuoyRange, DepthSample, DvlSample, GpsFix, GpsFixV1, ImuSample,
+    LblReply, LblSolution, NavSolution, PositionFix, PropellerSample, TruthState,
 };
 
 /// Why a message was rejected.
@@ -246,6 +246,15 @@ impl TryFrom<&GpsFix> for Gps {
     fn try_from(m: &GpsFix) -> Result<Self, Self::Error> {
         const T: &str = "GpsFix";
         scalar(T, "quality", f64::from(m.quality), 0.0, 8.0)?;
+        scalar(T, "velocity_valid", f64::from(m.velocity_valid), 0.0, 1.0)?;
+        let velocity = if m.velocity_valid == 1 {
+            Some((
+                vector(T, "vel_ned_m_s", m.vel_ned_m_s, 100.0)?,
+                scalar(T, "vel_std_m_s", m.vel_std_m_s, 0.0, 100.0)?,
+            ))
+        } else {
+            None
+        };
         Ok(Gps {
             stamp_ns: m.header.stamp_ns,
             lat_rad: scalar(T, "lat_rad", m.lat_rad, -PI / 2.0, PI / 2.0)?,
@@ -253,8 +262,15 @@ impl TryFrom<&GpsFix> for Gps {
             height_m: scalar(T, "height_m", m.height_m, -1000.0, 10_000.0)?,
             horizontal_std_m: scalar(T, "horizontal_std_m", m.horizontal_std_m, 0.0, 10_000.0)?,
             quality: m.quality,
-            velocity: None,
+            velocity,
         })
+    }
+}
+
+impl TryFrom<&GpsFixV1> for Gps {
+    type Error = ValidationError;
+    fn try_from(m: &GpsFixV1) -> Result<Self, Self::Error> {
+        Gps::try_from(&GpsFix::from(m))
     }
 }
 

@@ -89,6 +89,7 @@ registry!(
     DvlSample,
     DepthSample,
     GpsFix,
+    GpsFixV1,
     AhrsSample,
     PropellerSample,
     BuoyRange,

@@ -74,8 +74,8 @@ message! {
 }
 
 message! {
-    /// Surface GPS fix.
-    #[wire(type_name = "nauta.GpsFix.v1", size = 72)]
+    /// Surface GPS fix, with the receiver's velocity when it reports one.
+    #[wire(type_name = "nauta.GpsFix.v2", size = 112)]
     pub struct GpsFix {
         /// Common header.
         pub header: Header,
@@ -91,6 +91,53 @@ message! {
         pub quality: u32,
         /// Satellites used.
         pub satellites: u32,
+        /// Velocity over ground, NED, m/s (when `velocity_valid` is 1).
+        pub vel_ned_m_s: [f64; 3],
+        /// Velocity standard deviation per axis, m/s.
+        pub vel_std_m_s: f64,
+        /// 1 when the velocity fields hold a measurement, 0 when the
+        /// receiver reported none.
+        pub velocity_valid: u32,
+        /// Padding, zero.
+        pub pad: u32,
+    }
+}
+
+message! {
+    /// Surface GPS fix as recorded before `nauta.GpsFix.v2` (no velocity):
+    /// read from old recordings only, and turned into a v2 fix without a
+    /// velocity ([`GpsFix::from`]).
+    #[wire(type_name = "nauta.GpsFix.v1", size = 72)]
+    pub struct GpsFixV1 {
+        /// Common header.
+        pub header: Header,
+        /// Geodetic latitude, rad, WGS84.
+        pub lat_rad: f64,
+        /// Geodetic longitude, rad, WGS84.
+        pub lon_rad: f64,
+        /// Height above the ellipsoid, m.
+        pub height_m: f64,
+        /// Horizontal standard deviation, m.
+        pub horizontal_std_m: f64,
+        /// Fix quality: 0 none, 1 GPS, 2 DGPS, 4 RTK fixed, 5 RTK float.
+        pub quality: u32,
+        /// Satellites used.
+        pub satellites: u32,
+    }
+}
+
+impl From<&GpsFixV1> for GpsFix {
+    fn from(m: &GpsFixV1) -> Self {
+        GpsFix {
+            header: m.header,
+            lat_rad: m.lat_rad,
+            lon_rad: m.lon_rad,
+            height_m: m.height_m,
+            horizontal_std_m: m.horizontal_std_m,
+            quality: m.quality,
+            satellites: m.satellites,
+            ..Default::default()
+        }
     }
 }
 
@@ -288,13 +335,19 @@ impl SensorMessage {
         }
     }
 
-    /// Decodes a recorded payload of `service`; `None` for a service that is
-    /// not a sensor service.
+    /// Decodes a recorded payload of `service`, a message of `type_name`;
+    /// `None` for a service that is not a sensor service. A `GpsFix.v1` of
+    /// an older recording becomes a v2 fix without a velocity.
     pub fn decode(
         service: &str,
+        type_name: &str,
         data: &[u8],
     ) -> Option<Result<SensorMessage, crate::codec::DecodeError>> {
+        use crate::Message;
         use crate::codec::decode;
+        if service == GPS_SERVICE && type_name == GpsFixV1::TYPE_NAME {
+            return Some(decode::<GpsFixV1>(data).map(|m| Self::Gps(GpsFix::from(&m))));
+        }
         Some(match service {
             TRUTH_SERVICE => decode(data).map(Self::Truth),
             IMU_SERVICE => decode(data).map(Self::Imu),

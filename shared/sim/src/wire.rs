@@ -69,6 +69,10 @@ pub fn to_wire(m: &Measurements, out: &mut Vec<SensorMessage>) {
             horizontal_std_m: r.horizontal_std_m,
             quality: r.quality,
             satellites: r.satellites,
+            vel_ned_m_s: r.vel_ned_m_s,
+            vel_std_m_s: r.vel_std_m_s,
+            velocity_valid: 1,
+            pad: 0,
         }));
     }
     if let Some(r) = &m.propeller {

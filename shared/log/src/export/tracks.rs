@@ -39,7 +39,7 @@ impl TrackKind {
             NavSolution::TYPE_NAME => TrackKind::Nav,
             PositionFix::TYPE_NAME => TrackKind::Fix,
             LblSolution::TYPE_NAME => TrackKind::Lbl,
-            GpsFix::TYPE_NAME => TrackKind::Gps,
+            GpsFix::TYPE_NAME | nauta_messages::GpsFixV1::TYPE_NAME => TrackKind::Gps,
             AttitudeEstimate::TYPE_NAME => TrackKind::Attitude,
             _ => return None,
         })

@@ -211,6 +211,9 @@ pub struct GpsConfig {
     pub quality: u32,
     /// Satellites reported (default 8, our choice).
     pub satellites: u32,
+    /// Velocity σ per axis, m/s (default 0.05, a Doppler velocity of a
+    /// single-frequency receiver; our choice).
+    pub velocity_sigma_m_s: f64,
 }
 
 impl Default for GpsConfig {
@@ -223,6 +226,7 @@ impl Default for GpsConfig {
             vertical_sigma_m: 5.0,
             quality: 1,
             satellites: 8,
+            velocity_sigma_m_s: 0.05,
         }
     }
 }
@@ -480,6 +484,7 @@ impl SuiteConfig {
         };
         self.gps.horizontal_sigma_m = 0.0;
         self.gps.vertical_sigma_m = 0.0;
+        self.gps.velocity_sigma_m_s = 0.0;
         self.propeller.noise_sigma_rad_s = 0.0;
         self.modem.buoy_gps_sigma_m = 0.0;
         self.modem.buoy_random_walk_m_rt_s = 0.0;
@@ -518,6 +523,7 @@ impl SuiteConfig {
         finite("gps.max_depth_m", g.max_depth_m)?;
         non_negative("gps.horizontal_sigma_m", g.horizontal_sigma_m)?;
         non_negative("gps.vertical_sigma_m", g.vertical_sigma_m)?;
+        non_negative("gps.velocity_sigma_m_s", g.velocity_sigma_m_s)?;
         positive("propeller.rate_hz", self.propeller.rate_hz)?;
         non_negative(
             "propeller.noise_sigma_rad_s",

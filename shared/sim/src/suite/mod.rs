@@ -91,6 +91,9 @@ mod stream {
     pub const LBL: u64 = 11;
     /// DVL spikes apart from the DVL's noise (a spike-free run differs only by its spikes).
     pub const DVL_SPIKE: u64 = 12;
+    /// GPS velocity noise, apart from the position's (`nauta.GpsFix.v2`
+    /// added the velocity; the positions of v1 runs stay as they were).
+    pub const GPS_VELOCITY: u64 = 13;
 }
 
 fn sensor_rng(seed: u64, stream: u64) -> ChaCha8Rng {
@@ -271,7 +274,7 @@ pub struct SensorSuite {
     ahrs: Option<AhrsState>,
     dvl: Option<DvlState>,
     depth: Option<(Schedule, DepthNoise, ChaCha8Rng)>,
-    gps: Option<(Schedule, ChaCha8Rng)>,
+    gps: Option<(Schedule, ChaCha8Rng, ChaCha8Rng)>,
     propeller: Option<(Schedule, ChaCha8Rng)>,
     modem: Option<ModemState>,
     lbl: Option<LblState>,
@@ -341,6 +344,7 @@ impl SensorSuite {
             (
                 Schedule::new(config.gps.rate_hz),
                 sensor_rng(seed, stream::GPS),
+                sensor_rng(seed, stream::GPS_VELOCITY),
             )
         });
         let propeller = config.propeller.enabled.then(|| {
@@ -565,7 +569,7 @@ impl SensorSuite {
                 depth_m: noise.next(rng, truth.depth_m),
             });
         }
-        if let Some((schedule, rng)) = &mut self.gps {
+        if let Some((schedule, rng, vel_rng)) = &mut self.gps {
             let g = &self.config.gps;
             if schedule.due(stamp) && truth.depth_m < g.max_depth_m {
                 let dn = g.horizontal_sigma_m * normal(rng);
@@ -580,6 +584,10 @@ impl SensorSuite {
                     horizontal_std_m: g.horizontal_sigma_m,
                     quality: g.quality,
                     satellites: g.satellites,
+                    vel_ned_m_s: std::array::from_fn(|i| {
+                        truth.v_ned_m_s[i] + g.velocity_sigma_m_s * normal(vel_rng)
+                    }),
+                    vel_std_m_s: g.velocity_sigma_m_s,
                 });
             }
         }

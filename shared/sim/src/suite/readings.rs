@@ -94,6 +94,10 @@ pub struct GpsReading {
     pub quality: u32,
     /// Satellites used.
     pub satellites: u32,
+    /// Velocity over ground, NED, m/s.
+    pub vel_ned_m_s: [f64; 3],
+    /// Velocity σ per axis, m/s.
+    pub vel_std_m_s: f64,
 }
 
 /// `sensor/propeller` (`PropellerSample`).

@@ -93,6 +93,24 @@ fn rates_over_ten_minutes() {
         .count();
     assert_eq!(gps.len(), surfaced_seconds);
     assert!(gps.len() < 60, "{}", gps.len());
+    // The receiver's velocity (`GpsFix.v2`): the truth's, with the
+    // configured noise.
+    let sigma = SuiteConfig::survey().gps.velocity_sigma_m_s;
+    let errors: Vec<f64> = gps
+        .iter()
+        .filter_map(|x| {
+            let g = x.gps?;
+            assert_eq!(g.vel_std_m_s, sigma);
+            Some((0..3).map(move |i| g.vel_ned_m_s[i] - x.truth.vel_ned_m_s[i]))
+        })
+        .flatten()
+        .collect();
+    let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+    assert!(
+        (0.5 * sigma..2.0 * sigma).contains(&rms),
+        "velocity error RMS {rms} against σ {sigma} over {} values",
+        errors.len()
+    );
     // Default seafloor: lock throughout except dropouts.
     for d in m.iter().filter_map(|x| x.dvl) {
         let locked = matches!(d.event, DvlEvent::Valid | DvlEvent::Spike { .. });
@@ -193,6 +211,8 @@ fn noise_free_reproduces_truth() {
         }
         if let Some(g) = x.gps {
             assert_eq!((g.lat_rad, g.lon_rad), (t.lat_rad, t.lon_rad));
+            assert_eq!(g.vel_ned_m_s, <[f64; 3]>::from(t.v_ned_m_s));
+            assert_eq!(g.vel_std_m_s, 0.0);
         }
         assert_eq!(x.truth, TruthReading::from_truth(t));
     }

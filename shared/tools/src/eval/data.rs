@@ -286,11 +286,12 @@ impl Data {
 /// The types eval uses: the estimates and the references (the sensors'
 /// other channels, the bulk of a recording, are not decoded).
 fn reads(type_name: &str) -> bool {
-    use nauta_messages::{BuoyRange, GpsFix, LblReply, TruthState};
+    use nauta_messages::{BuoyRange, GpsFix, GpsFixV1, LblReply, TruthState};
     StreamKind::of(type_name).is_some()
         || [
             TruthState::TYPE_NAME,
             GpsFix::TYPE_NAME,
+            GpsFixV1::TYPE_NAME,
             LblReply::TYPE_NAME,
             BuoyRange::TYPE_NAME,
         ]
@@ -299,11 +300,12 @@ fn reads(type_name: &str) -> bool {
 
 /// The reference channels whose rejections eval reports.
 fn is_reference(topic: &str, type_name: &str) -> bool {
-    use nauta_messages::{BuoyRange, GpsFix, LblReply, TruthState};
+    use nauta_messages::{BuoyRange, GpsFix, GpsFixV1, LblReply, TruthState};
     matches!(
         (topic, type_name),
         (nauta_messages::TRUTH_SERVICE, TruthState::TYPE_NAME)
             | (nauta_messages::GPS_SERVICE, GpsFix::TYPE_NAME)
+            | (nauta_messages::GPS_SERVICE, GpsFixV1::TYPE_NAME)
             | (_, LblReply::TYPE_NAME)
             | (_, BuoyRange::TYPE_NAME)
     )

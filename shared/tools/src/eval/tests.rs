@@ -263,11 +263,15 @@ fn bad_messages_are_counted_never_trusted() {
     d.take("ains/nav", t, &[]);
     d.take("sim/truth", "nauta.TruthState.v1", &[1, 2, 3]);
     d.take("sensor/gps", "nauta.GpsFix.v1", &[0; 8]);
+    d.take("sensor/gps", "nauta.GpsFix.v2", &[0; 8]);
     d.take("some/other", "nauta.Unknown.v1", &[0; 3]);
     let s = &d.streams["ains/nav"];
     assert_eq!((s.samples.len(), s.rejected), (1, 4));
     assert_eq!(d.rejected["sim/truth"], 1);
-    assert_eq!(d.rejected["sensor/gps"], 1);
+    assert_eq!(
+        d.rejected["sensor/gps"], 2,
+        "v1 (older recordings) and v2 fixes"
+    );
     assert!(!d.rejected.contains_key("some/other"));
     // A zero quaternion: a position-only solution, no attitude.
     let mut m = NavSolution {
