@@ -150,6 +150,10 @@ enum BenchCommand {
     /// Kill a random estimator every 5-15 s of a wall-clock survey at 10x; restarts,
     /// latencies, losses and the attitude error beside a run without kills.
     Chaos(bench::chaos::ChaosArgs),
+    /// The aided INS's variants in process on the simulator: paper 002's
+    /// manoeuvres over seeds (predicted against realised error), DVL spikes
+    /// with and without the filter, the survey, speed.
+    Nav(bench::nav::NavArgs),
     /// Wall-clock pacing: the survey in `wall` clock at each `--rate` (1 and
     /// 10 by default); the sensor's wall span against the expected.
     Pacing(bench::pacing::PacingArgs),
@@ -244,6 +248,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Pacing(args) => bench::pacing::run(&args).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Nav(args) => bench::nav::run_bench(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Attitude { broad, sim, json } => match (broad, sim) {
                 (Some(dir), _) => bench::attitude::run_broad(&dir, json),
                 (None, _) => bench::attitude::run_sim(json),

@@ -5,6 +5,7 @@ pub mod attitude;
 pub mod chaos;
 pub mod ipc;
 pub mod log;
+pub mod nav;
 pub mod pacing;
 pub mod sim;
 

@@ -1,0 +1,391 @@
+//! `nauta bench nav [--json] [--quick]`: the aided INS's variants in process,
+//! on the simulator, scored by `nauta eval`'s own code (issue 13, point 7).
+//!
+//! Each run feeds one estimator the simulator's sensor messages as the
+//! service gets them: the wire messages of each step (`nauta_sim::wire`),
+//! checked by the same conversions, in the service's tie order (IMU, DVL,
+//! depth, GPS, AHRS); its `ains/nav` outputs, the truth and the GPS fixes go
+//! through `nauta_tools::eval::Data::take` as a recording's bytes would, and
+//! `eval::evaluate` gives the figures (`nauta eval`'s keys, dives included).
+//!
+//! - `dr`: paper 002's manoeuvres 1-3 over seeds 100-119 (`--quick`: 5):
+//!   the first dive's realised error in % of the distance, its RMS over
+//!   seeds, and the predictor's value at the same moment (paper 002:
+//!   predicted 2.6 / 0.5 / 2.3 %, realised 3.2 / 1.6 / 2.8 %).
+//! - `spikes`: manoeuvre 2, the same seeds with and without the simulator's
+//!   DVL spikes (their own random stream), with and without the spike
+//!   filter: the RMS over seeds of the end-position shift.
+//! - `survey`: paper 000's survey with each variant, `aided` and `unaided`
+//!   (without position aiding; `dr` has none, so both are the same run).
+//! - `realtime_factor`: mission seconds per second of the estimator's own
+//!   time on the survey (the simulator's time not counted).
+//!
+//! The `dr` scenarios run the IMU and the truth at 20 Hz (the `dr`'s own
+//! sensors, AHRS 10 Hz, DVL 5 Hz, GPS 1 Hz, draw the same numbers at any IMU
+//! rate: each sensor has its own random stream), as the accuracy test
+//! `shared/estimation/tests/ains_dr` does; the survey runs at its 100 Hz.
+
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use serde_json::{Map, Value, json};
+
+use nauta_estimation::Estimator;
+use nauta_estimation::ains::AinsInput;
+use nauta_estimation::ains::dr::{DeadReckoning, DrParams, Site};
+use nauta_estimation::readings::Nav;
+use nauta_messages::checked::{Ahrs, Depth, Dvl, Gps, Imu};
+use nauta_messages::{
+    GPS_SERVICE, Message, NavSolution, SensorMessage, TRUTH_SERVICE, TruthState, codec,
+};
+use nauta_sim::mission::Origin;
+use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams};
+use nauta_sim::suite::SuiteConfig;
+use nauta_tools::eval::{self, Data, Metrics};
+
+/// Arguments of `nauta bench nav`.
+#[derive(Debug, clap::Args)]
+pub struct NavArgs {
+    /// Print one JSON object (keys in BENCHMARKS.md, "Aided INS").
+    #[arg(long)]
+    pub json: bool,
+    /// Five seeds per manoeuvre instead of twenty.
+    #[arg(long)]
+    pub quick: bool,
+}
+
+/// The seeds of the benchmarks over seeds (100-199 are the benchmark's).
+fn seeds(quick: bool) -> Vec<u64> {
+    (100..if quick { 105 } else { 120 }).collect()
+}
+
+/// One in-process run: what eval makes of it, its outputs, and time.
+#[derive(Debug)]
+pub struct Run {
+    /// The evaluation of `ains/nav` against the truth.
+    pub metrics: Metrics,
+    /// Every solution, in order.
+    pub nav: Vec<Nav>,
+    /// Mission seconds simulated.
+    pub mission_s: f64,
+    /// Time spent in the estimator's `on_input`.
+    pub estimator: Duration,
+}
+
+/// The service's order of inputs at one stamp (services/ains: IMU, DVL,
+/// depth, GPS, AHRS), and each wire message as the input it becomes.
+fn input_of(m: &SensorMessage) -> Option<(u8, AinsInput)> {
+    Some(match m {
+        SensorMessage::Imu(w) => (0, AinsInput::Imu(Imu::try_from(w).ok()?)),
+        SensorMessage::Dvl(w) => (1, AinsInput::Dvl(Dvl::try_from(w).ok()?)),
+        SensorMessage::Depth(w) => (2, AinsInput::Depth(Depth::try_from(w).ok()?)),
+        SensorMessage::Gps(w) => (3, AinsInput::Gps(Gps::try_from(w).ok()?)),
+        SensorMessage::Ahrs(w) => (4, AinsInput::Ahrs(Ahrs::try_from(w).ok()?)),
+        _ => return None,
+    })
+}
+
+fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
+    data.take(topic, M::TYPE_NAME, &codec::encode(m)?);
+    Ok(())
+}
+
+/// Runs `estimator` over `scenario` with `sensors` and `seed`.
+pub fn run<E>(
+    scenario: &ScenarioParams,
+    sensors: SuiteConfig,
+    seed: u64,
+    estimator: &mut E,
+) -> anyhow::Result<Run>
+where
+    E: Estimator<Input = AinsInput, Output = Nav>,
+{
+    let mut g =
+        Generator::new(scenario, Origin::lisbon(), sensors, seed, 1e6).context("the scenario")?;
+    let mut data = Data::default();
+    let (mut wire, mut inputs, mut out, mut nav) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut spent = Duration::ZERO;
+    let mut last_stamp = 0;
+    while let Some(step) = g.step() {
+        let step = step.context("a simulator step")?;
+        wire.clear();
+        nauta_sim::wire::to_wire(&step, &mut wire);
+        inputs.clear();
+        for m in &wire {
+            match m {
+                SensorMessage::Truth(t) => take::<TruthState>(&mut data, TRUTH_SERVICE, t)?,
+                SensorMessage::Gps(f) => take(&mut data, GPS_SERVICE, f)?,
+                _ => {}
+            }
+            inputs.extend(input_of(m));
+        }
+        inputs.sort_by_key(|(order, _)| *order);
+        for (_, input) in &inputs {
+            out.clear();
+            let t0 = Instant::now();
+            // An input the estimator refuses is counted by the service; here
+            // the simulator's inputs are valid, and a refusal only loses it.
+            let _ = estimator.on_input(input, &mut out);
+            spent += t0.elapsed();
+            for n in &out {
+                take(&mut data, "ains/nav", &NavSolution::from(n))?;
+            }
+            nav.extend_from_slice(&out);
+        }
+        last_stamp = step.stamp_ns;
+    }
+    data.gps.sort_by_key(|f| f.stamp_ns);
+    eval::live::sort(&mut data);
+    let evaluation = eval::evaluate(std::path::Path::new("(in process)"), &data)?;
+    let metrics = evaluation
+        .streams
+        .get("ains/nav")
+        .cloned()
+        .context("the estimator published no solution")?;
+    Ok(Run {
+        metrics,
+        nav,
+        mission_s: last_stamp as f64 * 1e-9,
+        estimator: spent,
+    })
+}
+
+/// The simulator's site (origin and the declination its magnetometer and
+/// AHRS have there).
+fn site(scenario: &ScenarioParams, sensors: SuiteConfig, seed: u64) -> anyhow::Result<Site> {
+    let g = Generator::new(scenario, Origin::lisbon(), sensors, seed, 1e6)?;
+    let o = g.simulator().mission().origin();
+    Ok(Site {
+        lat_rad: o.lat_rad,
+        lon_rad: o.lon_rad,
+        declination_rad: g.suite().declination_rad(),
+    })
+}
+
+fn dr_scenario(manoeuvre: u8) -> ScenarioParams {
+    ScenarioParams {
+        scenario: ScenarioKind::Dr,
+        dr_manoeuvre: manoeuvre,
+        imu_rate_hz: 20.0,
+        ..Default::default()
+    }
+}
+
+/// `dr` on `scenario` with `params`.
+fn run_dr(
+    scenario: &ScenarioParams,
+    sensors: SuiteConfig,
+    seed: u64,
+    params: &DrParams,
+) -> anyhow::Result<Run> {
+    let mut dr = DeadReckoning::new(params, site(scenario, sensors.clone(), seed)?)?;
+    run(scenario, sensors, seed, &mut dr)
+}
+
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+}
+
+/// The first dive's realised error and the predictor's value then, both in
+/// % of the distance submerged.
+fn first_dive_pct(m: &Metrics) -> Option<(f64, f64)> {
+    let d = m.dives.as_ref()?.first()?;
+    Some((d.error_pct?, 100.0 * d.predicted_error_m? / d.distance_m))
+}
+
+/// Paper 002's manoeuvres: realised RMS over seeds and mean prediction, %.
+fn dr_manoeuvres(quick: bool, progress: bool) -> anyhow::Result<Map<String, Value>> {
+    let mut out = Map::new();
+    for m in 1..=3u8 {
+        let scenario = dr_scenario(m);
+        let (mut realised, mut predicted) = (Vec::new(), Vec::new());
+        for seed in seeds(quick) {
+            let r = run_dr(
+                &scenario,
+                scenario.sensors_preset(),
+                seed,
+                &DrParams::default(),
+            )?;
+            let (e, p) = first_dive_pct(&r.metrics)
+                .with_context(|| format!("manoeuvre {m}, seed {seed}: no dive"))?;
+            realised.push(e);
+            predicted.push(p);
+            if progress {
+                eprintln!("  dr manoeuvre {m} seed {seed}: realised {e:.2} %, predicted {p:.2} %");
+            }
+        }
+        let predicted_pct = predicted.iter().sum::<f64>() / predicted.len() as f64;
+        out.insert(
+            m.to_string(),
+            json!({ "dr": {
+                "realised_rms_pct": rms(&realised),
+                "predicted_pct": predicted_pct,
+                "seeds": realised.len(),
+            }}),
+        );
+    }
+    Ok(out)
+}
+
+/// The horizontal distance between two solutions, m (exact plane at the first).
+fn shift_m(a: &Nav, b: &Nav) -> f64 {
+    let (n, e) =
+        nauta_estimation::local::flat::to_local(a.lat_rad, a.lon_rad, b.lat_rad, b.lon_rad);
+    n.hypot(e)
+}
+
+/// The last solution before the end of the first dive.
+fn dive_end(r: &Run) -> Option<Nav> {
+    let end = r.metrics.dives.as_ref()?.first()?.end_stamp_ns;
+    r.nav.iter().rev().find(|n| n.stamp_ns < end).copied()
+}
+
+/// Paper 002 Fig. 5: the spikes' end shift with and without the filter.
+fn spikes(quick: bool, progress: bool) -> anyhow::Result<Value> {
+    let scenario = dr_scenario(2);
+    let spiky = scenario.sensors_preset();
+    let mut clean = spiky.clone();
+    clean.dvl.noise.spike_probability = 0.0;
+    let unfiltered = DrParams {
+        spike_filter: false,
+        ..DrParams::default()
+    };
+    let (mut with, mut without) = (Vec::new(), Vec::new());
+    for seed in seeds(quick) {
+        let end = |sensors: &SuiteConfig, params: &DrParams| -> anyhow::Result<Nav> {
+            dive_end(&run_dr(&scenario, sensors.clone(), seed, params)?).context("no dive end")
+        };
+        let reference_f = end(&clean, &DrParams::default())?;
+        let reference_u = end(&clean, &unfiltered)?;
+        let f = shift_m(&end(&spiky, &DrParams::default())?, &reference_f);
+        let u = shift_m(&end(&spiky, &unfiltered)?, &reference_u);
+        if progress {
+            eprintln!("  spikes seed {seed}: shift {f:.3} m filtered, {u:.3} m unfiltered");
+        }
+        with.push(f);
+        without.push(u);
+    }
+    let (f, u) = (rms(&with), rms(&without));
+    Ok(json!({ "dr": {
+        "filtered_shift_m": f,
+        "unfiltered_shift_m": u,
+        "ratio": f / u,
+        "seeds": with.len(),
+    }}))
+}
+
+/// The eval keys of a run, as `nauta eval --json` prints them.
+fn eval_keys(m: &Metrics) -> anyhow::Result<Value> {
+    Ok(serde_json::to_value(m)?)
+}
+
+/// Runs the benchmark and prints its figures.
+pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
+    let progress = !args.json;
+    let t0 = Instant::now();
+    let survey = ScenarioParams::default();
+    anyhow::ensure!(
+        survey.scenario == ScenarioKind::Survey,
+        "the default scenario is not the survey"
+    );
+    let dr_survey = run_dr(&survey, survey.sensors_preset(), 7, &DrParams::default())?;
+    let dr_eval = eval_keys(&dr_survey.metrics)?;
+    let realtime = dr_survey.mission_s / dr_survey.estimator.as_secs_f64().max(1e-12);
+    if progress {
+        eprintln!(
+            "survey, seed 7: dr {:.0} s of mission, {realtime:.0}x real time in process",
+            dr_survey.mission_s
+        );
+    }
+    let dr = dr_manoeuvres(args.quick, progress)?;
+    let spikes = spikes(args.quick, progress)?;
+    let result = json!({
+        "survey": {
+            "aided": { "dr": dr_eval },
+            "unaided": { "dr": dr_eval },
+        },
+        "dr": dr,
+        "spikes": spikes,
+        "realtime_factor": { "dr": realtime },
+        "wall_s": t0.elapsed().as_secs_f64(),
+    });
+    if args.json {
+        println!("{result}");
+    } else {
+        print_table(&result);
+    }
+    Ok(())
+}
+
+fn print_table(r: &Value) {
+    println!("aided INS, in process on the simulator (nauta eval's figures)");
+    if let Some(v) = r["survey"]["aided"].as_object() {
+        for (variant, m) in v {
+            println!(
+                "survey {variant:<4} horizontal RMS {:.2} m, velocity RMS N/E/D {:.4} / {:.4} / {:.4} m/s, dive drift {:.2} m/km, slope N/E/D {} m/km",
+                m["horizontal_rms_m"].as_f64().unwrap_or(f64::NAN),
+                m["vel_north_rms_m_s"].as_f64().unwrap_or(f64::NAN),
+                m["vel_east_rms_m_s"].as_f64().unwrap_or(f64::NAN),
+                m["vel_down_rms_m_s"].as_f64().unwrap_or(f64::NAN),
+                m["dive_drift_m_per_km"].as_f64().unwrap_or(f64::NAN),
+                m["drift_slope_m_per_km"]
+                    .as_array()
+                    .map(|a| a
+                        .iter()
+                        .map(|x| format!("{:.2}", x.as_f64().unwrap_or(f64::NAN)))
+                        .collect::<Vec<_>>()
+                        .join(" / "))
+                    .unwrap_or_default(),
+            );
+        }
+    }
+    if let Some(v) = r["dr"].as_object() {
+        for (m, per) in v {
+            let d = &per["dr"];
+            println!(
+                "dr manoeuvre {m}: realised RMS {:.2} %, predicted {:.2} % over {} seeds (paper 002: predicted 2.6 / 0.5 / 2.3 %, realised 3.2 / 1.6 / 2.8 %)",
+                d["realised_rms_pct"].as_f64().unwrap_or(f64::NAN),
+                d["predicted_pct"].as_f64().unwrap_or(f64::NAN),
+                d["seeds"],
+            );
+        }
+    }
+    let s = &r["spikes"]["dr"];
+    println!(
+        "spikes, manoeuvre 2: end shift RMS {:.3} m filtered, {:.3} m unfiltered, ratio {:.3} (target <= 0.10)",
+        s["filtered_shift_m"].as_f64().unwrap_or(f64::NAN),
+        s["unfiltered_shift_m"].as_f64().unwrap_or(f64::NAN),
+        s["ratio"].as_f64().unwrap_or(f64::NAN),
+    );
+    if let Some(v) = r["realtime_factor"].as_object() {
+        for (variant, x) in v {
+            println!(
+                "speed {variant}: {:.0}x real time in process",
+                x.as_f64().unwrap_or(f64::NAN)
+            );
+        }
+    }
+    println!("{:.0} s", r["wall_s"].as_f64().unwrap_or(f64::NAN));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The in-process run is the service's: one solution per AHRS and DVL
+    /// sample of `dr` (the inputs that trigger it), and eval finds the
+    /// manoeuvre's one dive with the predictor's value at its end.
+    #[test]
+    fn a_dr_manoeuvre_runs_in_process_and_eval_finds_its_dive() {
+        let scenario = dr_scenario(1);
+        let r = run_dr(&scenario, scenario.sensors_preset(), 100, &DrParams::default())
+            .expect("run");
+        let dives = r.metrics.dives.as_ref().expect("dives");
+        assert_eq!(dives.len(), 1, "{dives:?}");
+        let (realised, predicted) = first_dive_pct(&r.metrics).expect("a dive with a prediction");
+        assert!(realised > 0.0 && predicted > 0.0, "{realised} {predicted}");
+        assert_eq!(r.metrics.samples as usize, r.nav.len());
+        assert!(r.mission_s > 600.0, "{}", r.mission_s);
+        assert!(dive_end(&r).is_some());
+    }
+}
