@@ -33,11 +33,14 @@ use serde_json::{Map, Value, json};
 use nauta_estimation::Estimator;
 use nauta_estimation::ains::AinsInput;
 use nauta_estimation::ains::dr::{DeadReckoning, DrParams, Site};
+use nauta_estimation::attitude_core::{AttitudeCore, VariantParams};
 use nauta_estimation::readings::Nav;
-use nauta_messages::checked::{Ahrs, Depth, Dvl, Gps, Imu};
+use nauta_messages::checked::{Ahrs, Attitude, Depth, Dvl, Gps, Imu};
 use nauta_messages::{
-    GPS_SERVICE, Message, NavSolution, SensorMessage, TRUTH_SERVICE, TruthState, codec,
+    AttitudeEstimate, GPS_SERVICE, Message, NavSolution, SensorMessage, TRUTH_SERVICE, TruthState,
+    codec,
 };
+use nauta_runtime::Manifest;
 use nauta_sim::mission::Origin;
 use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams};
 use nauta_sim::suite::SuiteConfig;
@@ -70,6 +73,9 @@ pub struct Run {
     pub mission_s: f64,
     /// Time spent in the estimator's `on_input`.
     pub estimator: Duration,
+    /// IMU samples the attitude estimator took and the time it spent, when
+    /// it ran.
+    pub attitude: Option<(u64, Duration)>,
 }
 
 /// The service's order of inputs at one stamp (services/ains: IMU, DVL,
@@ -90,12 +96,16 @@ fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs `estimator` over `scenario` with `sensors` and `seed`.
+/// Runs `estimator` over `scenario` with `sensors` and `seed`; with
+/// `attitude`, that estimator runs on the IMU too and its estimates are the
+/// `attitude/estimate` input (after the sensor's inputs of the same stamp,
+/// as the service declares it).
 pub fn run<E>(
     scenario: &ScenarioParams,
     sensors: SuiteConfig,
     seed: u64,
     estimator: &mut E,
+    mut attitude: Option<&mut AttitudeCore>,
 ) -> anyhow::Result<Run>
 where
     E: Estimator<Input = AinsInput, Output = Nav>,
@@ -105,6 +115,8 @@ where
     let mut data = Data::default();
     let (mut wire, mut inputs, mut out, mut nav) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut spent = Duration::ZERO;
+    let (mut attitude_samples, mut attitude_spent, mut reports) =
+        (0u64, Duration::ZERO, Vec::new());
     let mut last_stamp = 0;
     while let Some(step) = g.step() {
         let step = step.context("a simulator step")?;
@@ -118,6 +130,20 @@ where
                 _ => {}
             }
             inputs.extend(input_of(m));
+            if let (SensorMessage::Imu(w), Some(core)) = (m, attitude.as_deref_mut())
+                && let Ok(imu) = Imu::try_from(w)
+            {
+                reports.clear();
+                let t0 = Instant::now();
+                let _ = core.on_input(&imu, &mut reports);
+                attitude_spent += t0.elapsed();
+                attitude_samples += 1;
+                for r in &reports {
+                    if let Ok(a) = Attitude::try_from(&AttitudeEstimate::from(r)) {
+                        inputs.push((5, AinsInput::Attitude(a)));
+                    }
+                }
+            }
         }
         inputs.sort_by_key(|(order, _)| *order);
         for (_, input) in &inputs {
@@ -147,7 +173,29 @@ where
         nav,
         mission_s: last_stamp as f64 * 1e-9,
         estimator: spent,
+        attitude: attitude.map(|_| (attitude_samples, attitude_spent)),
     })
+}
+
+/// The shipped survey manifest: the bench runs what a vehicle runs (the
+/// attitude's parameters and magnetometer calibration, the aided INS's).
+const SURVEY_MANIFEST: &str = include_str!("../../../launch/survey.toml");
+
+/// The survey manifest, parsed.
+pub fn survey_manifest() -> anyhow::Result<Manifest> {
+    Manifest::parse(std::path::Path::new("launch/survey.toml"), SURVEY_MANIFEST)
+}
+
+/// The survey's attitude `pf`, as `nauta-attitude` builds it from the manifest.
+pub fn survey_attitude() -> anyhow::Result<AttitudeCore> {
+    let m = survey_manifest()?;
+    let params = VariantParams::Pf(m.params("attitude", Some("pf"))?);
+    let site = m.site.context("launch/survey.toml has no [site]")?;
+    AttitudeCore::new(
+        &params,
+        site.latitude_deg.to_radians(),
+        site.magnetic_declination_deg.to_radians(),
+    )
 }
 
 /// The simulator's site (origin and the declination its magnetometer and
@@ -179,7 +227,7 @@ fn run_dr(
     params: &DrParams,
 ) -> anyhow::Result<Run> {
     let mut dr = DeadReckoning::new(params, site(scenario, sensors.clone(), seed)?)?;
-    run(scenario, sensors, seed, &mut dr)
+    run(scenario, sensors, seed, &mut dr, None)
 }
 
 fn rms(v: &[f64]) -> f64 {
@@ -288,7 +336,25 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
         survey.scenario == ScenarioKind::Survey,
         "the default scenario is not the survey"
     );
-    let dr_survey = run_dr(&survey, survey.sensors_preset(), 7, &DrParams::default())?;
+    // The survey's attitude PF runs beside the first variant: its speed at
+    // its shipped particle count is the attitude figure.
+    let mut attitude = survey_attitude()?;
+    let mut dr = DeadReckoning::new(
+        &DrParams::default(),
+        site(&survey, survey.sensors_preset(), 7)?,
+    )?;
+    let dr_survey = run(
+        &survey,
+        survey.sensors_preset(),
+        7,
+        &mut dr,
+        Some(&mut attitude),
+    )?;
+    let (att_n, att_t) = dr_survey.attitude.context("the attitude ran")?;
+    let attitude_rate = att_n as f64 / att_t.as_secs_f64().max(1e-12);
+    if progress {
+        eprintln!("survey, seed 7: attitude pf {attitude_rate:.0} samples/s");
+    }
     let dr_eval = eval_keys(&dr_survey.metrics)?;
     let realtime = dr_survey.mission_s / dr_survey.estimator.as_secs_f64().max(1e-12);
     if progress {
@@ -307,6 +373,7 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
         "dr": dr,
         "spikes": spikes,
         "realtime_factor": { "dr": realtime },
+        "attitude_pf_samples_per_s": attitude_rate,
         "wall_s": t0.elapsed().as_secs_f64(),
     });
     if args.json {
@@ -365,6 +432,10 @@ fn print_table(r: &Value) {
             );
         }
     }
+    println!(
+        "attitude pf: {:.0} samples/s in process (target >= 100,000)",
+        r["attitude_pf_samples_per_s"].as_f64().unwrap_or(f64::NAN)
+    );
     println!("{:.0} s", r["wall_s"].as_f64().unwrap_or(f64::NAN));
 }
 
@@ -378,8 +449,13 @@ mod tests {
     #[test]
     fn a_dr_manoeuvre_runs_in_process_and_eval_finds_its_dive() {
         let scenario = dr_scenario(1);
-        let r = run_dr(&scenario, scenario.sensors_preset(), 100, &DrParams::default())
-            .expect("run");
+        let r = run_dr(
+            &scenario,
+            scenario.sensors_preset(),
+            100,
+            &DrParams::default(),
+        )
+        .expect("run");
         let dives = r.metrics.dives.as_ref().expect("dives");
         assert_eq!(dives.len(), 1, "{dives:?}");
         let (realised, predicted) = first_dive_pct(&r.metrics).expect("a dive with a prediction");
