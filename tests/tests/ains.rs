@@ -54,7 +54,14 @@ fn dr_in_the_pipeline_is_deterministic_and_accurate() {
         Some(digest),
         "same seed, other bytes"
     );
-    assert_eq!(a.rejected(), Some(0), "{a}");
+    // Refused: the DVL spikes the filter caught (the simulator draws them
+    // on 0.5 % of the DVL samples), nothing else.
+    let dvl = a.count("sensor/dvl").expect("sensor/dvl count");
+    let rejected = a.rejected().expect("rejected");
+    assert!(
+        rejected > 0 && rejected * 50 < dvl,
+        "{rejected} refused of {dvl} DVL samples\n{a}"
+    );
     // One solution per AHRS sample (10 Hz) of the 679 s manoeuvre.
     let n = a.count("ains/nav").expect("ains/nav count");
     let ahrs = a.count("sensor/ahrs").expect("sensor/ahrs count");

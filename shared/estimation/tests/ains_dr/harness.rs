@@ -216,7 +216,11 @@ impl Tracked {
             self.gps_distance_m = m.truth.distance_m;
         }
         self.out.clear();
-        self.dr.on_input(input, &mut self.out).expect("valid input");
+        // A spike or a gated fix is refused (counted by the service); any
+        // other refusal of the simulator's input is a defect.
+        if let Err(e) = self.dr.on_input(input, &mut self.out) {
+            assert!(matches!(e.kind, "dvl-spike" | "gps-gated"), "{e}");
+        }
         if let Some(n) = self.out.last() {
             let t = &m.truth;
             self.last = Some((*n, origin.to_local(t.lat_rad, t.lon_rad)));

@@ -105,11 +105,23 @@ fn gps(t_s: f64, lat_rad: f64, lon_rad: f64) -> AinsInput {
 }
 
 fn feed(dr: &mut DeadReckoning, inputs: &[AinsInput]) -> Vec<Nav> {
-    let mut out = Vec::new();
+    feed_counting(dr, inputs).0
+}
+
+/// Feeds `inputs`; the outputs and the kinds of the measurements refused
+/// (a spike, a gated fix: counted by the service as rejected inputs).
+fn feed_counting(dr: &mut DeadReckoning, inputs: &[AinsInput]) -> (Vec<Nav>, Vec<&'static str>) {
+    let (mut out, mut refused) = (Vec::new(), Vec::new());
     for i in inputs {
-        dr.on_input(i, &mut out).expect("valid input");
+        if let Err(e) = dr.on_input(i, &mut out) {
+            assert!(
+                matches!(e.kind, "dvl-spike" | "gps-gated"),
+                "a valid input refused: {e}"
+            );
+            refused.push(e.kind);
+        }
     }
-    out
+    (out, refused)
 }
 
 /// A synthetic straight run: a fix at t = 0, then 100 s at 1.5 m/s forward
@@ -520,7 +532,7 @@ fn an_outlying_gps_fix_is_gated_but_cannot_lock_the_gps_out() {
         }
         inputs.push(ahrs(t, 0.0));
     }
-    let out = feed(&mut dr, &inputs);
+    let (out, refused) = feed_counting(&mut dr, &inputs);
     let s = dr.stats();
     // Fixes: the first, the re-anchoring one at 6 s and the four after it.
     assert_eq!(
@@ -528,6 +540,8 @@ fn an_outlying_gps_fix_is_gated_but_cannot_lock_the_gps_out() {
         (5, 1, 6),
         "{s:?}"
     );
+    // Each gated fix refused, so the service counts it (and logs the first).
+    assert_eq!(refused, vec!["gps-gated"; 5]);
     let north = |t_s: f64| {
         let n = out
             .iter()

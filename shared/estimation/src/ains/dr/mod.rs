@@ -301,7 +301,9 @@ impl DeadReckoning {
         self.nav.last_ahrs_ns = Some(t);
     }
 
-    fn on_dvl(&mut self, d: &Dvl, t: u64) {
+    /// Takes a DVL sample; `Err` when the spike filter rejected it (the
+    /// state moved on with the IMU-predicted velocity).
+    fn on_dvl(&mut self, d: &Dvl, t: u64) -> Result<(), EstimatorError> {
         let v = d.velocity_body_m_s.to_array();
         let euler = self.nav.euler_rad;
         if !d.bottom_lock {
@@ -309,14 +311,14 @@ impl DeadReckoning {
             if let Some(p) = euler.and_then(|e| self.spike.predicted_body(e)) {
                 self.nav.v_body_m_s = p;
             }
-            return;
+            return Ok(());
         }
         let Some(e) = euler else {
             // No attitude to predict with: taken as it is.
             self.spike.forget();
             self.nav.v_body_m_s = v;
             self.nav.last_dvl_aid_ns = Some(t);
-            return;
+            return Ok(());
         };
         match self.spike.on_dvl(v, e) {
             Decision::Accepted => {
@@ -331,8 +333,15 @@ impl DeadReckoning {
             Decision::Rejected(p) => {
                 self.nav.stats.spikes_rejected += 1;
                 self.nav.v_body_m_s = p;
+                return Err(err(
+                    "dvl-spike",
+                    format!(
+                        "DVL velocity {v:?} m/s rejected by the spike filter (eq. 7): the IMU predicts {p:?} m/s"
+                    ),
+                ));
             }
         }
+        Ok(())
     }
 
     fn on_depth(&mut self, d: &Depth, t: u64) {
@@ -366,14 +375,22 @@ impl DeadReckoning {
         (d * vn * vn - 2.0 * b * vn * ve + a * ve * ve) / det
     }
 
-    fn on_gps(&mut self, g: &Gps, t: u64) {
+    /// Takes a fix; `Err` when the gate refused it.
+    fn on_gps(&mut self, g: &Gps, t: u64) -> Result<(), EstimatorError> {
         let gate = self.config.gps_gate_chi2;
-        if gate > 0.0 && self.gps_innovation(g) > gate {
+        let innovation = self.gps_innovation(g);
+        if gate > 0.0 && innovation > gate {
             let s = &mut self.nav.stats;
             if s.gps_gated_in_a_row < self.config.gps_gate_max_rejections {
                 s.gps_gated += 1;
                 s.gps_gated_in_a_row += 1;
-                return;
+                return Err(err(
+                    "gps-gated",
+                    format!(
+                        "GPS fix refused by the gate: normalised innovation {innovation:.1} above {gate} ({} in a row; the next {} re-anchor)",
+                        s.gps_gated_in_a_row, self.config.gps_gate_max_rejections
+                    ),
+                ));
             }
             s.gps_reanchored += 1;
         }
@@ -384,6 +401,7 @@ impl DeadReckoning {
         self.predictor.reset_horizontal(g.horizontal_std_m);
         self.nav.last_gps_ns = Some(t);
         self.nav.stats.gps_fixes += 1;
+        Ok(())
     }
 
     /// The solution at `t` (after the step to `t`).
@@ -452,11 +470,14 @@ impl Estimator for DeadReckoning {
                 out.push(self.output(t));
             }
             AinsInput::Dvl(d) => {
-                self.on_dvl(d, t);
+                let taken = self.on_dvl(d, t);
                 self.step(t);
                 if !self.fresh(self.nav.last_ahrs_ns, t) {
                     out.push(self.output(t));
                 }
+                // A spike is refused and counted (the shell's health); the
+                // solution of this instant is published all the same.
+                taken?;
             }
             AinsInput::Depth(d) => {
                 self.step_if_stale(t);
@@ -464,7 +485,7 @@ impl Estimator for DeadReckoning {
             }
             AinsInput::Gps(g) => {
                 self.step(t);
-                self.on_gps(g, t);
+                self.on_gps(g, t)?;
             }
             AinsInput::Attitude(_) | AinsInput::Fix(_) => self.step_if_stale(t),
         }
