@@ -96,25 +96,27 @@ fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs `estimator` over `scenario` with `sensors` and `seed`; with
-/// `attitude`, that estimator runs on the IMU too and its estimates are the
-/// `attitude/estimate` input (after the sensor's inputs of the same stamp,
-/// as the service declares it).
-pub fn run<E>(
+/// Runs each of `estimators` over `scenario` with `sensors` and `seed`, on
+/// the same sensor data; with `attitude`, that estimator runs on the IMU too
+/// and its estimates are the `attitude/estimate` input (after the sensor's
+/// inputs of the same stamp, as the service declares it).
+pub fn run_all<E>(
     scenario: &ScenarioParams,
     sensors: SuiteConfig,
     seed: u64,
-    estimator: &mut E,
+    estimators: &mut [E],
     mut attitude: Option<&mut AttitudeCore>,
-) -> anyhow::Result<Run>
+) -> anyhow::Result<Vec<Run>>
 where
     E: Estimator<Input = AinsInput, Output = Nav>,
 {
     let mut g =
         Generator::new(scenario, Origin::lisbon(), sensors, seed, 1e6).context("the scenario")?;
-    let mut data = Data::default();
-    let (mut wire, mut inputs, mut out, mut nav) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut spent = Duration::ZERO;
+    let n = estimators.len();
+    let mut data: Vec<Data> = (0..n).map(|_| Data::default()).collect();
+    let mut nav: Vec<Vec<Nav>> = vec![Vec::new(); n];
+    let mut spent = vec![Duration::ZERO; n];
+    let (mut wire, mut inputs, mut out) = (Vec::new(), Vec::new(), Vec::new());
     let (mut attitude_samples, mut attitude_spent, mut reports) =
         (0u64, Duration::ZERO, Vec::new());
     let mut last_stamp = 0;
@@ -124,10 +126,12 @@ where
         nauta_sim::wire::to_wire(&step, &mut wire);
         inputs.clear();
         for m in &wire {
-            match m {
-                SensorMessage::Truth(t) => take::<TruthState>(&mut data, TRUTH_SERVICE, t)?,
-                SensorMessage::Gps(f) => take(&mut data, GPS_SERVICE, f)?,
-                _ => {}
+            for d in data.iter_mut() {
+                match m {
+                    SensorMessage::Truth(t) => take::<TruthState>(d, TRUTH_SERVICE, t)?,
+                    SensorMessage::Gps(f) => take(d, GPS_SERVICE, f)?,
+                    _ => {}
+                }
             }
             inputs.extend(input_of(m));
             if let (SensorMessage::Imu(w), Some(core)) = (m, attitude.as_deref_mut())
@@ -146,35 +150,58 @@ where
             }
         }
         inputs.sort_by_key(|(order, _)| *order);
-        for (_, input) in &inputs {
-            out.clear();
-            let t0 = Instant::now();
-            // An input the estimator refuses is counted by the service; here
-            // the simulator's inputs are valid, and a refusal only loses it.
-            let _ = estimator.on_input(input, &mut out);
-            spent += t0.elapsed();
-            for n in &out {
-                take(&mut data, "ains/nav", &NavSolution::from(n))?;
+        for (k, estimator) in estimators.iter_mut().enumerate() {
+            for (_, input) in &inputs {
+                out.clear();
+                let t0 = Instant::now();
+                // A refusal (a spike, a gated fix) is counted by the service;
+                // here it only means the input was not used.
+                let _ = estimator.on_input(input, &mut out);
+                spent[k] += t0.elapsed();
+                for o in &out {
+                    take(&mut data[k], "ains/nav", &NavSolution::from(o))?;
+                }
+                nav[k].extend_from_slice(&out);
             }
-            nav.extend_from_slice(&out);
         }
         last_stamp = step.stamp_ns;
     }
-    data.gps.sort_by_key(|f| f.stamp_ns);
-    eval::live::sort(&mut data);
-    let evaluation = eval::evaluate(std::path::Path::new("(in process)"), &data)?;
-    let metrics = evaluation
-        .streams
-        .get("ains/nav")
-        .cloned()
-        .context("the estimator published no solution")?;
-    Ok(Run {
-        metrics,
-        nav,
-        mission_s: last_stamp as f64 * 1e-9,
-        estimator: spent,
-        attitude: attitude.map(|_| (attitude_samples, attitude_spent)),
-    })
+    let mut runs = Vec::with_capacity(n);
+    for ((mut d, nav), spent) in data.into_iter().zip(nav).zip(spent) {
+        eval::live::sort(&mut d);
+        let evaluation = eval::evaluate(std::path::Path::new("(in process)"), &d)?;
+        let metrics = evaluation
+            .streams
+            .get("ains/nav")
+            .cloned()
+            .context("the estimator published no solution")?;
+        runs.push(Run {
+            metrics,
+            nav,
+            mission_s: last_stamp as f64 * 1e-9,
+            estimator: spent,
+            attitude: attitude
+                .is_some()
+                .then_some((attitude_samples, attitude_spent)),
+        });
+    }
+    Ok(runs)
+}
+
+/// [`run_all`] with one estimator.
+pub fn run<E>(
+    scenario: &ScenarioParams,
+    sensors: SuiteConfig,
+    seed: u64,
+    estimator: E,
+    attitude: Option<&mut AttitudeCore>,
+) -> anyhow::Result<Run>
+where
+    E: Estimator<Input = AinsInput, Output = Nav>,
+{
+    run_all(scenario, sensors, seed, &mut [estimator], attitude)?
+        .pop()
+        .context("no run")
 }
 
 /// The shipped survey manifest: the bench runs what a vehicle runs (the
@@ -226,8 +253,8 @@ fn run_dr(
     seed: u64,
     params: &DrParams,
 ) -> anyhow::Result<Run> {
-    let mut dr = DeadReckoning::new(params, site(scenario, sensors.clone(), seed)?)?;
-    run(scenario, sensors, seed, &mut dr, None)
+    let dr = DeadReckoning::new(params, site(scenario, sensors.clone(), seed)?)?;
+    run(scenario, sensors, seed, dr, None)
 }
 
 fn rms(v: &[f64]) -> f64 {
@@ -339,17 +366,11 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
     // The survey's attitude PF runs beside the first variant: its speed at
     // its shipped particle count is the attitude figure.
     let mut attitude = survey_attitude()?;
-    let mut dr = DeadReckoning::new(
+    let dr = DeadReckoning::new(
         &DrParams::default(),
         site(&survey, survey.sensors_preset(), 7)?,
     )?;
-    let dr_survey = run(
-        &survey,
-        survey.sensors_preset(),
-        7,
-        &mut dr,
-        Some(&mut attitude),
-    )?;
+    let dr_survey = run(&survey, survey.sensors_preset(), 7, dr, Some(&mut attitude))?;
     let (att_n, att_t) = dr_survey.attitude.context("the attitude ran")?;
     let attitude_rate = att_n as f64 / att_t.as_secs_f64().max(1e-12);
     if progress {
