@@ -62,12 +62,16 @@ pub struct DrParams {
     /// The error predictor (paper 002 eqs. 14-17) and the sensors'
     /// specification it is fed from.
     pub predictor: PredictorParams,
+    /// Accepted so that `ains.params.position_aiding` serves every variant;
+    /// `dr` never uses position fixes (paper 002 has none), whatever it says.
+    pub position_aiding: bool,
 }
 
 impl Default for DrParams {
     fn default() -> Self {
         Self {
             spike_filter: true,
+            position_aiding: true,
             spike_threshold_m_s: 0.3,
             spike_max_rejections: 5,
             max_prediction_s: 2.0,
