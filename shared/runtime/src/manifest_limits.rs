@@ -58,7 +58,7 @@ pub const MAX_PROCESS_NAME: usize = 32;
 
 /// The flags the launcher passes every service binary (DESIGN §5 binary
 /// contract): a process's `args` may not repeat or override them.
-pub const LAUNCHER_FLAGS: [&str; 8] = [
+pub const LAUNCHER_FLAGS: [&str; 9] = [
     "--manifest",
     "--process",
     "--namespace",
@@ -67,6 +67,7 @@ pub const LAUNCHER_FLAGS: [&str; 8] = [
     "--standby",
     "--snapshot",
     "--resume-after",
+    "--absent",
 ];
 
 /// The launcher flag `arg` sets (`--namespace` or `--namespace=X`), if any.
