@@ -124,6 +124,10 @@ enum ImportCommand {
     /// A BROAD trial (IMU and optical reference) as `sensor/imu` and `sim/truth`,
     /// with a manifest that replays it through the attitude process.
     Broad(import::ImportBroadArgs),
+    /// One trajectory of the Snapir AUV's A-KIT data set (github ansfl/A-KIT,
+    /// `Data/TrajectoryN/`): its reference INS as the truth and the AHRS and
+    /// depth, its DVL, and with `--imu` its 100 Hz IMU.
+    Akit(import::akit::ImportAkitArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -241,6 +245,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         },
         Command::Import { which } => match which {
             ImportCommand::Broad(args) => import::broad(&args),
+            ImportCommand::Akit(args) => import::akit::akit(&args),
         },
         Command::Bench { which } => match which {
             BenchCommand::Log { json } => bench::log::run(json).map(|()| ExitCode::SUCCESS),

@@ -33,6 +33,12 @@ pub struct DepthTare {
     state: TareState,
 }
 
+/// The largest offset a surface session may set, m: a gauge's offset is
+/// the atmospheric pressure's change and its mounting (tenths of a metre);
+/// a "surface" session that reads metres is not at the surface (a fix taken
+/// under way, as A-KIT's imported initial fix at 20 m), and is ignored.
+pub const MAX_OFFSET_M: f64 = 2.0;
+
 impl DepthTare {
     /// A tare averaging about `samples` readings (at least 1).
     pub fn new(samples: u64) -> Self {
@@ -48,7 +54,7 @@ impl DepthTare {
         s.session_count = s.session_count.saturating_add(1);
         let weight = s.session_count.min(self.samples) as f64;
         s.session_mean_m += (raw_m - s.session_mean_m) / weight;
-        if s.session_count >= self.samples {
+        if s.session_count >= self.samples && s.session_mean_m.abs() <= MAX_OFFSET_M {
             s.offset_m = s.session_mean_m;
         }
     }
@@ -84,6 +90,16 @@ impl DepthTare {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_session_that_reads_metres_is_not_at_the_surface() {
+        let mut t = DepthTare::new(3);
+        for _ in 0..5 {
+            t.push_surface(20.0);
+        }
+        assert_eq!(t.offset_m(), 0.0);
+        assert_eq!(t.depth_m(20.0), 20.0);
+    }
 
     #[test]
     fn the_offset_is_the_surface_mean_and_a_new_surfacing_retares() {

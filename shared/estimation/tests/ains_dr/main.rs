@@ -148,9 +148,9 @@ fn eq1_and_eq4_on_a_synthetic_straight_leg() {
     let last = out.last().expect("outputs");
     assert_eq!(out.len(), 1000, "one output per AHRS sample");
     let psi = 50f64.to_radians();
-    // Integrated distance: the velocity starts at the first DVL sample (0.2 s),
-    // the trapezoid from 0.1 s (v = 0) to 0.2 s adds half of one step.
-    let d = 1.5 * (100.0 - 0.2) + 0.5 * 1.5 * 0.1;
+    // Integrated distance: the velocity holds from each DVL sample on (a
+    // zero-order hold), so it starts at the first one (0.2 s).
+    let d = 1.5 * (100.0 - 0.2);
     let (n, e) = (d * psi.cos(), d * psi.sin());
     let lat = SITE.lat_rad + n / meridian_radius(SITE.lat_rad);
     let lon = SITE.lon_rad + e / (transverse_radius(SITE.lat_rad) * SITE.lat_rad.cos());

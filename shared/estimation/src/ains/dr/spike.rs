@@ -126,7 +126,13 @@ impl SpikeFilter {
 
     /// Judges a DVL sample `v_b` (FRD, m/s) taken at `euler`.
     pub fn on_dvl(&mut self, v_b: [f64; 3], euler: [f64; 3]) -> Decision {
-        let predicted = self.predicted_body(euler);
+        // Judged only against a prediction the IMU carried forward: with no
+        // IMU sample since the last accepted DVL sample (a log without an
+        // IMU, such as A-KIT's 1 Hz DVL), the "prediction" would be that
+        // last velocity, and every manoeuvre a spike.
+        let predicted = self
+            .predicted_body(euler)
+            .filter(|_| self.state.span_s > 0.0 || self.state.v_body_held_m_s.is_some());
         let decision = match predicted {
             Some(p) if self.config.enabled => {
                 let d = Vector3::from(v_b) - Vector3::from(p);

@@ -1,0 +1,11 @@
+//! `nauta import ...`: outside data sets as recordings, replayed through the
+//! running pipeline (`nauta replay OUT.mcap --fast --record RUN.mcap`) and
+//! evaluated (`nauta eval RUN.mcap`).
+//!
+//! - [`broad`]: BROAD IMU trials with their optical reference (attitude).
+//! - [`akit`]: the Snapir AUV's A-KIT trajectories (DVL, reference INS, IMU).
+
+pub mod akit;
+pub mod broad;
+
+pub use broad::{ImportBroadArgs, ImportSite, broad, write_broad};
