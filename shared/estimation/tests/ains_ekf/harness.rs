@@ -9,12 +9,45 @@ use nauta_estimation::Estimator;
 use nauta_estimation::ains::AinsInput;
 use nauta_estimation::ains::dr::Site;
 use nauta_estimation::ains::ekf::{Ekf, EkfParams, EkfStats};
-use nauta_estimation::attitude_core::{AttitudeCore, VariantParams};
+use nauta_estimation::attitude_core::{
+    AttitudeCore, MagnetometerParams, MekfVariantParams, PfVariantParams, VariantParams,
+};
 use nauta_estimation::frames::Vector;
 use nauta_estimation::readings::{Ahrs, Attitude, Depth, Dvl, Gps, Imu, Nav};
 use nauta_sim::mission::Origin;
 use nauta_sim::scenario::{Generator, ScenarioParams};
-use nauta_sim::suite::Measurements;
+use nauta_sim::suite::{Measurements, SuiteConfig};
+
+/// The magnetometer calibration that inverts the simulator's survey
+/// hard and soft iron (`W = S⁻¹`, `h` in µT), as `nauta calibrate
+/// magnetometer` would fit it and the manifest give it.
+pub fn calibrated_magnetometer() -> MagnetometerParams {
+    let spec = SuiteConfig::survey().imu.mag;
+    let s_inv = spec.soft_iron_matrix().try_inverse().expect("invertible");
+    MagnetometerParams {
+        hard_iron_ut: spec.hard_iron.map(|h| h * 1e6),
+        soft_iron_inv: [0, 1, 2].map(|r| [0, 1, 2].map(|c| s_inv[(r, c)])),
+    }
+}
+
+/// The attitude role's `pf` (default, `alignment_samples = 400` as the
+/// shipped manifests) with the calibrated magnetometer.
+pub fn attitude_pf() -> Heading {
+    Heading::Attitude(VariantParams::Pf(PfVariantParams {
+        alignment_samples: 400,
+        magnetometer: calibrated_magnetometer(),
+        ..Default::default()
+    }))
+}
+
+/// The same with the `mekf`.
+pub fn attitude_mekf() -> Heading {
+    Heading::Attitude(VariantParams::Mekf(MekfVariantParams {
+        alignment_samples: 400,
+        magnetometer: calibrated_magnetometer(),
+        ..Default::default()
+    }))
+}
 
 /// Where the heading aiding comes from.
 #[derive(Debug, Clone)]
@@ -128,6 +161,11 @@ pub struct Figures {
     pub imu_samples: u64,
     /// The last solution.
     pub last: Option<Nav>,
+    /// RMS yaw error submerged, and RMS of the filter's yaw σ, rad.
+    pub yaw_rms_rad: [f64; 2],
+    /// Σ squared yaw error, Σ published yaw variance, count, of the
+    /// attitude estimate fed in.
+    pub source_yaw: [f64; 3],
 }
 
 impl Figures {
@@ -169,15 +207,20 @@ pub fn site(g: &Generator) -> Site {
 /// `duration_s` through an `ekf` of `params`, heading from `heading`;
 /// `each` sees every input and the estimator after it (for snapshot tests).
 pub fn run(seed: u64, duration_s: f64, params: &EkfParams, heading: Heading) -> Figures {
+    run_with(seed, duration_s, params, heading, SuiteConfig::survey())
+}
+
+/// [`run`] with these sensors.
+pub fn run_with(
+    seed: u64,
+    duration_s: f64,
+    params: &EkfParams,
+    heading: Heading,
+    sensors: SuiteConfig,
+) -> Figures {
     let scenario = ScenarioParams::default();
-    let mut g = Generator::new(
-        &scenario,
-        Origin::lisbon(),
-        scenario.sensors_preset(),
-        seed,
-        duration_s,
-    )
-    .expect("valid scenario");
+    let mut g = Generator::new(&scenario, Origin::lisbon(), sensors, seed, duration_s)
+        .expect("valid scenario");
     let origin = g.simulator().mission().origin();
     let mut ekf = Ekf::new(params, site(&g)).expect("valid");
     let mut core = match heading {
@@ -201,7 +244,10 @@ pub fn run(seed: u64, duration_s: f64, params: &EkfParams, heading: Heading) -> 
         ekf_time: Duration::ZERO,
         imu_samples: 0,
         last: None,
+        yaw_rms_rad: [0.0; 2],
+        source_yaw: [0.0; 3],
     };
+    let mut syaw = [0.0; 2];
     let mut last_gps_ns: Option<u64> = None;
     let mut dive_start_distance = 0.0;
     let mut in_dive = false;
@@ -215,6 +261,19 @@ pub fn run(seed: u64, duration_s: f64, params: &EkfParams, heading: Heading) -> 
         buf.clear();
         inputs(&s, core.as_mut(), &mut buf);
         out.clear();
+        for i in &buf {
+            if let AinsInput::Attitude(a) = i {
+                let tq = nauta_estimation::frames::Rotation::<
+                    nauta_estimation::frames::Frd,
+                    nauta_estimation::frames::Ned,
+                >::from_wxyz(s.truth.quat_nb)
+                .expect("unit");
+                let ey = nauta_estimation::attitude::wrap_pi(a.attitude.euler().2 - tq.euler().2);
+                f.source_yaw[0] += ey * ey;
+                f.source_yaw[1] += a.std_rad.z() * a.std_rad.z();
+                f.source_yaw[2] += 1.0;
+            }
+        }
         let t0 = Instant::now();
         for i in &buf {
             ekf.on_input(i, &mut out).expect("valid input");
@@ -269,6 +328,16 @@ pub fn run(seed: u64, duration_s: f64, params: &EkfParams, heading: Heading) -> 
         let m2 = (e[0] / ps[0]).powi(2) + (e[1] / ps[1]).powi(2);
         inside += (m2 <= 5.991) as usize;
         f.max_horizontal_m = f.max_horizontal_m.max(e[0].hypot(e[1]));
+        if let (Some(q), Some(fl)) = (nav.attitude, ekf.filter()) {
+            let tq = nauta_estimation::frames::Rotation::<
+                nauta_estimation::frames::Frd,
+                nauta_estimation::frames::Ned,
+            >::from_wxyz(t.quat_nb)
+            .expect("unit");
+            let ey = nauta_estimation::attitude::wrap_pi(q.euler().2 - tq.euler().2);
+            syaw[0] += ey * ey;
+            syaw[1] += fl.p[(2, 2)];
+        }
     }
     let n = f.submerged.max(1) as f64;
     for k in 0..3 {
@@ -278,6 +347,7 @@ pub fn run(seed: u64, duration_s: f64, params: &EkfParams, heading: Heading) -> 
     f.inside_95 = inside as f64 / n;
     f.vel_inside_95 = vel_inside as f64 / n;
     f.stats = ekf.stats();
+    f.yaw_rms_rad = [(syaw[0] / n).sqrt(), (syaw[1] / n).sqrt()];
     f
 }
 
@@ -288,7 +358,7 @@ pub fn report(name: &str, f: &Figures) {
         "{name}: dives {} (distance {:.0?} m, end error NED {:.2?} m, σ_h {:.2?} m) | \
          end drift N/E/D {:.2}/{:.2}/{:.2} m/km | slope N/E/D {:.2}/{:.2}/{:.2} m/km | \
          vel RMS N/E/D {:.4}/{:.4}/{:.4} m/s | inside 95 % pos {:.1} % vel {:.1} % | \
-         max horiz {:.2} m | {} submerged of {} outputs | {:.3} µs per IMU sample | {:?}",
+         max horiz {:.2} m | yaw RMS {:.3}° σ {:.3}° (source {:.3}° σ {:.3}°) | {} submerged of {} outputs | {:.3} µs per IMU sample | {:?}",
         f.dives.len(),
         f.dives.iter().map(|e| e.distance_m).collect::<Vec<_>>(),
         f.dives.iter().map(|e| e.error_ned_m).collect::<Vec<_>>(),
@@ -305,6 +375,10 @@ pub fn report(name: &str, f: &Figures) {
         100.0 * f.inside_95,
         100.0 * f.vel_inside_95,
         f.max_horizontal_m,
+        f.yaw_rms_rad[0].to_degrees(),
+        f.yaw_rms_rad[1].to_degrees(),
+        (f.source_yaw[0] / f.source_yaw[2].max(1.0)).sqrt().to_degrees(),
+        (f.source_yaw[1] / f.source_yaw[2].max(1.0)).sqrt().to_degrees(),
         f.submerged,
         f.outputs,
         f.us_per_imu(),

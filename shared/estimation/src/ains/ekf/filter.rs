@@ -72,7 +72,7 @@ impl Filter {
     /// One IMU sample: the strapdown with the bias-corrected sample
     /// (`f̃ − b̂_a`, `ω̃ − b̂_g`), its `f^n` into the covariance block, and the
     /// covariance step once the block holds `covariance_decimation` samples.
-    pub fn on_imu(&mut self, m: &Imu, cfg: &EkfConfig) -> Result<(), StrapdownError> {
+    pub fn on_imu(&mut self, m: &Imu, cfg: &EkfConfig, bh_std: f64) -> Result<(), StrapdownError> {
         let w = m.gyro_rad_s.to_nalgebra() - self.bg;
         let f = m.accel_m_s2.to_nalgebra() - self.ba;
         let c_before = self.c_nb();
@@ -95,17 +95,17 @@ impl Filter {
             m.interval_s,
         );
         if self.block.samples >= cfg.covariance_decimation {
-            self.flush(cfg);
+            self.flush(cfg, bh_std);
         }
         Ok(())
     }
 
     /// Propagates the covariance over the samples accumulated so far (before
     /// a measurement, so that it sees the covariance of its stamp).
-    pub fn flush(&mut self, cfg: &EkfConfig) {
+    pub fn flush(&mut self, cfg: &EkfConfig, bh_std: f64) {
         let g = normal_gravity(self.nav.lat_rad, self.nav.height_m);
         let w_ie = earth_rate_ned(self.nav.lat_rad);
-        propagate_covariance(&mut self.p, &mut self.block, cfg, g / EARTH_RADIUS_M, &w_ie);
+        propagate_covariance(&mut self.p, &mut self.block, cfg, bh_std, g / EARTH_RADIUS_M, &w_ie);
     }
 
     /// Feeds the error-state estimate `dx` back (closed loop): attitude

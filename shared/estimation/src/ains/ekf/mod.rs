@@ -288,7 +288,13 @@ impl Ekf {
         p[(POS, POS + 1)] = pos[4] * pos[2] * pos[3];
         p[(POS + 1, POS)] = p[(POS, POS + 1)];
         p[(POS + 2, POS + 2)] = 1.0;
-        p[(BH, BH)] = c.heading_bias_std * c.heading_bias_std;
+        let source = if self.pending.from_ahrs {
+            HEADING_AHRS
+        } else {
+            HEADING_ATTITUDE
+        };
+        p[(BH, BH)] = self.bh_std(source).powi(2);
+        self.heading_source = source;
         self.filter = Some(Filter {
             nav,
             ba: Vector3::zeros(),
@@ -373,7 +379,12 @@ impl Ekf {
                 return Ok(());
             }
         } else if let Some(f) = self.filter.as_mut() {
-            f.on_imu(m, &self.config)
+            let bh = if self.heading_source == HEADING_ATTITUDE {
+                self.config.attitude_heading_bias_std
+            } else {
+                self.config.heading_bias_std
+            };
+            f.on_imu(m, &self.config, bh)
                 .map_err(|e| err("imu-refused", e))?;
         }
         self.stats.imu_samples += 1;
@@ -383,10 +394,20 @@ impl Ekf {
         Ok(())
     }
 
+    /// The heading bias state's stationary σ for `source`.
+    fn bh_std(&self, source: u8) -> f64 {
+        if source == HEADING_ATTITUDE {
+            self.config.attitude_heading_bias_std
+        } else {
+            self.config.heading_bias_std
+        }
+    }
+
     fn flush(&mut self) {
         let cfg = self.config;
+        let bh = self.bh_std(self.heading_source);
         if let Some(f) = self.filter.as_mut() {
-            f.flush(&cfg);
+            f.flush(&cfg, bh);
         }
     }
 
@@ -518,7 +539,7 @@ impl Ekf {
             return;
         }
         self.stamps.heading_tried = Some(t);
-        let bh_var = self.config.heading_bias_std * self.config.heading_bias_std;
+        let bh_var = self.bh_std(source).powi(2);
         if self.heading_source != source {
             // Another source, another error: its bias starts afresh.
             if let Some(f) = self.filter.as_mut() {

@@ -108,7 +108,7 @@ impl Block {
 }
 
 /// The continuous-time noise spectral densities, diagonal of `Q_c`.
-fn q_c(cfg: &EkfConfig) -> SVector<f64, N> {
+fn q_c(cfg: &EkfConfig, bh_std: f64) -> SVector<f64, N> {
     let mut q = SVector::<f64, N>::zeros();
     for i in 0..3 {
         q[ATT + i] = cfg.gyro_noise * cfg.gyro_noise;
@@ -116,7 +116,7 @@ fn q_c(cfg: &EkfConfig) -> SVector<f64, N> {
         q[BA + i] = cfg.accel_bias_walk * cfg.accel_bias_walk;
         q[BG + i] = cfg.gyro_bias_walk * cfg.gyro_bias_walk;
     }
-    q[BH] = 2.0 * cfg.heading_bias_std * cfg.heading_bias_std / cfg.heading_bias_time_s;
+    q[BH] = 2.0 * bh_std * bh_std / cfg.heading_bias_time_s;
     q
 }
 
@@ -141,11 +141,14 @@ fn f_t(b: &Block, gamma_over_r: f64, w_ie: &Vector3<f64>, tau_h: f64) -> Cov {
     f
 }
 
-/// Propagates `p` over the block `b` (module docs) and empties the block.
+/// Propagates `p` over the block `b` (module docs) and empties the block;
+/// `bh_std` is the heading bias state's stationary σ (it depends on the
+/// heading source).
 pub fn propagate_covariance(
     p: &mut Cov,
     b: &mut Block,
     cfg: &EkfConfig,
+    bh_std: f64,
     gamma_over_r: f64,
     w_ie: &Vector3<f64>,
 ) {
@@ -156,7 +159,7 @@ pub fn propagate_covariance(
     let ft = f_t(b, gamma_over_r, w_ie, cfg.heading_bias_time_s);
     let phi = Cov::identity() + ft + 0.5 * ft * ft;
     let mut next = phi * *p * phi.transpose();
-    let q = q_c(cfg);
+    let q = q_c(cfg, bh_std);
     for i in 0..N {
         next[(i, i)] += q[i] * b.t_s;
     }

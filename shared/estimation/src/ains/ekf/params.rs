@@ -48,10 +48,15 @@ pub struct EkfParams {
     pub heading_bias_std_rad: f64,
     /// ... and this correlation time, s. Default 600.
     pub heading_bias_time_s: f64,
+    /// The stationary σ of that state while the attitude estimate is the
+    /// heading source, rad. Default 0.0026 (0.15°: the attitude role's
+    /// `mekf` and `pf` with a calibrated magnetometer hold the survey's
+    /// yaw to about 0.1° RMS, test `explore_heading_sources`).
+    pub attitude_heading_bias_std_rad: f64,
     /// White noise of the AHRS heading, rad. Default 0.0175 (1°).
     pub ahrs_heading_std_rad: f64,
     /// Smallest white noise σ of the attitude estimate's yaw, rad (its
-    /// published σ is used when larger). Default 0.0087 (0.5°).
+    /// published σ is used when larger). Default 0.0017 (0.1°).
     pub attitude_heading_std_floor_rad: f64,
     /// A heading measurement is used at most once per this interval, s
     /// (the measurement's error is correlated: more frequent updates would
@@ -109,8 +114,9 @@ impl Default for EkfParams {
             initial_tilt_std_rad: 0.0087,
             heading_bias_std_rad: 0.035,
             heading_bias_time_s: 600.0,
+            attitude_heading_bias_std_rad: 0.0026,
             ahrs_heading_std_rad: 0.0175,
-            attitude_heading_std_floor_rad: 0.0087,
+            attitude_heading_std_floor_rad: 0.0017,
             heading_interval_s: 1.0,
             dvl_std_m_s: 0.012,
             dvl_lever_arm_m: [0.0; 3],
@@ -168,6 +174,7 @@ pub struct EkfConfig {
     pub(super) initial_tilt_std: f64,
     pub(super) heading_bias_std: f64,
     pub(super) heading_bias_time_s: f64,
+    pub(super) attitude_heading_bias_std: f64,
     pub(super) ahrs_heading_std: f64,
     pub(super) attitude_heading_std_floor: f64,
     pub(super) heading_interval_ns: u64,
@@ -253,6 +260,14 @@ impl EkfParams {
                 f64::INFINITY,
                 true,
                 "(0, inf] s",
+            )?,
+            attitude_heading_bias_std: in_range(
+                "attitude_heading_bias_std_rad",
+                self.attitude_heading_bias_std_rad,
+                0.0,
+                1.0,
+                false,
+                "[0, 1] rad",
             )?,
             ahrs_heading_std: angle("ahrs_heading_std_rad", self.ahrs_heading_std_rad)?,
             attitude_heading_std_floor: angle(
