@@ -166,6 +166,10 @@ pub struct Figures {
     /// Σ squared yaw error, Σ published yaw variance, count, of the
     /// attitude estimate fed in.
     pub source_yaw: [f64; 3],
+    /// One solution a second.
+    pub trace: Vec<TracePoint>,
+    /// Heading north, south, other: Σ source yaw error, n, Σ EKF yaw error, n.
+    pub legs: [[f64; 4]; 3],
 }
 
 impl Figures {
@@ -189,7 +193,11 @@ impl Figures {
 /// A least-squares line `y = a + b x`: its slope `b`.
 fn slope(sx: f64, sy: f64, sxx: f64, sxy: f64, n: f64) -> f64 {
     let d = n * sxx - sx * sx;
-    if d > 0.0 { (n * sxy - sx * sy) / d } else { 0.0 }
+    if d > 0.0 {
+        (n * sxy - sx * sy) / d
+    } else {
+        0.0
+    }
 }
 
 /// The simulator's declination at the scenario's origin and the origin as
@@ -207,16 +215,40 @@ pub fn site(g: &Generator) -> Site {
 /// `duration_s` through an `ekf` of `params`, heading from `heading`;
 /// `each` sees every input and the estimator after it (for snapshot tests).
 pub fn run(seed: u64, duration_s: f64, params: &EkfParams, heading: Heading) -> Figures {
-    run_with(seed, duration_s, params, heading, SuiteConfig::survey())
+    run_with(
+        seed,
+        duration_s,
+        params,
+        heading,
+        SuiteConfig::survey(),
+        None,
+    )
 }
 
-/// [`run`] with these sensors.
+/// One solution a second.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TracePoint {
+    /// Time, s.
+    pub t_s: f64,
+    /// `aiding_mode`.
+    pub aiding_mode: u32,
+    /// `predicted_drift_m`.
+    pub predicted_drift_m: f64,
+    /// Velocity σ north, m/s.
+    pub vel_std_n_m_s: f64,
+    /// Horizontal error, m.
+    pub horizontal_error_m: f64,
+}
+
+/// [`run`] with these sensors, and without the DVL samples in
+/// `dvl_gap_s` (from, to), s.
 pub fn run_with(
     seed: u64,
     duration_s: f64,
     params: &EkfParams,
     heading: Heading,
     sensors: SuiteConfig,
+    dvl_gap_s: Option<(f64, f64)>,
 ) -> Figures {
     let scenario = ScenarioParams::default();
     let mut g = Generator::new(&scenario, Origin::lisbon(), sensors, seed, duration_s)
@@ -225,9 +257,9 @@ pub fn run_with(
     let mut ekf = Ekf::new(params, site(&g)).expect("valid");
     let mut core = match heading {
         Heading::Ahrs => None,
-        Heading::Attitude(ref p) => Some(
-            AttitudeCore::new(p, origin.lat_rad, g.suite().declination_rad()).expect("valid"),
-        ),
+        Heading::Attitude(ref p) => {
+            Some(AttitudeCore::new(p, origin.lat_rad, g.suite().declination_rad()).expect("valid"))
+        }
     };
     let mut buf = Vec::new();
     let mut out = Vec::new();
@@ -246,6 +278,8 @@ pub fn run_with(
         last: None,
         yaw_rms_rad: [0.0; 2],
         source_yaw: [0.0; 3],
+        trace: Vec::new(),
+        legs: [[0.0; 4]; 3],
     };
     let mut syaw = [0.0; 2];
     let mut last_gps_ns: Option<u64> = None;
@@ -260,6 +294,12 @@ pub fn run_with(
         let s = s.expect("valid step");
         buf.clear();
         inputs(&s, core.as_mut(), &mut buf);
+        if let Some((a, b)) = dvl_gap_s {
+            let t = s.stamp_ns as f64 * 1e-9;
+            if t >= a && t < b {
+                buf.retain(|i| !matches!(i, AinsInput::Dvl(_)));
+            }
+        }
         out.clear();
         for i in &buf {
             if let AinsInput::Attitude(a) = i {
@@ -272,6 +312,16 @@ pub fn run_with(
                 f.source_yaw[0] += ey * ey;
                 f.source_yaw[1] += a.std_rad.z() * a.std_rad.z();
                 f.source_yaw[2] += 1.0;
+                let c = tq.euler().2.cos();
+                let k = if c > 0.9 {
+                    0
+                } else if c < -0.9 {
+                    1
+                } else {
+                    2
+                };
+                f.legs[k][0] += ey;
+                f.legs[k][1] += 1.0;
             }
         }
         let t0 = Instant::now();
@@ -295,6 +345,17 @@ pub fn run_with(
         };
         f.outputs += 1;
         f.last = Some(*nav);
+        if s.stamp_ns % 1_000_000_000 == 0 {
+            let (nn, ne) = origin.to_local(nav.lat_rad, nav.lon_rad);
+            let (tn, te) = origin.to_local(s.truth.lat_rad, s.truth.lon_rad);
+            f.trace.push(TracePoint {
+                t_s: s.stamp_ns as f64 * 1e-9,
+                aiding_mode: nav.aiding_mode,
+                predicted_drift_m: nav.predicted_drift_m,
+                vel_std_n_m_s: nav.vel_std_ned_m_s.x(),
+                horizontal_error_m: (nn - tn).hypot(ne - te),
+            });
+        }
         let submerged = last_gps_ns.is_some_and(|l| s.stamp_ns.saturating_sub(l) > 2_000_000_000);
         if !submerged {
             continue;
@@ -336,6 +397,16 @@ pub fn run_with(
             .expect("unit");
             let ey = nauta_estimation::attitude::wrap_pi(q.euler().2 - tq.euler().2);
             syaw[0] += ey * ey;
+            let c = tq.euler().2.cos();
+            let k = if c > 0.9 {
+                0
+            } else if c < -0.9 {
+                1
+            } else {
+                2
+            };
+            f.legs[k][2] += ey;
+            f.legs[k][3] += 1.0;
             syaw[1] += fl.p[(2, 2)];
         }
     }
@@ -358,11 +429,15 @@ pub fn report(name: &str, f: &Figures) {
         "{name}: dives {} (distance {:.0?} m, end error NED {:.2?} m, σ_h {:.2?} m) | \
          end drift N/E/D {:.2}/{:.2}/{:.2} m/km | slope N/E/D {:.2}/{:.2}/{:.2} m/km | \
          vel RMS N/E/D {:.4}/{:.4}/{:.4} m/s | inside 95 % pos {:.1} % vel {:.1} % | \
-         max horiz {:.2} m | yaw RMS {:.3}° σ {:.3}° (source {:.3}° σ {:.3}°) | {} submerged of {} outputs | {:.3} µs per IMU sample | {:?}",
+         max horiz {:.2} m | yaw RMS {:.3}° σ {:.3}° (source {:.3}° σ {:.3}°) | \
+         mean yaw error heading N/S/other: source {:.3?}°, ekf {:.3?}° | {} submerged of {} outputs | {:.3} µs per IMU sample | {:?}",
         f.dives.len(),
         f.dives.iter().map(|e| e.distance_m).collect::<Vec<_>>(),
         f.dives.iter().map(|e| e.error_ned_m).collect::<Vec<_>>(),
-        f.dives.iter().map(|e| e.predicted_drift_m).collect::<Vec<_>>(),
+        f.dives
+            .iter()
+            .map(|e| e.predicted_drift_m)
+            .collect::<Vec<_>>(),
         d[0],
         d[1],
         d[2],
@@ -377,8 +452,14 @@ pub fn report(name: &str, f: &Figures) {
         f.max_horizontal_m,
         f.yaw_rms_rad[0].to_degrees(),
         f.yaw_rms_rad[1].to_degrees(),
-        (f.source_yaw[0] / f.source_yaw[2].max(1.0)).sqrt().to_degrees(),
-        (f.source_yaw[1] / f.source_yaw[2].max(1.0)).sqrt().to_degrees(),
+        (f.source_yaw[0] / f.source_yaw[2].max(1.0))
+            .sqrt()
+            .to_degrees(),
+        (f.source_yaw[1] / f.source_yaw[2].max(1.0))
+            .sqrt()
+            .to_degrees(),
+        f.legs.map(|l| (l[0] / l[1].max(1.0)).to_degrees()),
+        f.legs.map(|l| (l[2] / l[3].max(1.0)).to_degrees()),
         f.submerged,
         f.outputs,
         f.us_per_imu(),

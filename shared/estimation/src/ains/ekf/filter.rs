@@ -6,7 +6,9 @@
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-use super::model::{ATT, BA, BG, BH, Block, Cov, ErrorState, N, POS, VEL, propagate_covariance};
+use super::model::{
+    ATT, BA, BG, BH, Block, Cov, DA, DC, ErrorState, HeadingBias, N, POS, VEL, propagate_covariance,
+};
 use super::params::EkfConfig;
 use super::snapshot::{FilterState, from_upper, upper};
 use crate::attitude::wrap_pi;
@@ -29,6 +31,8 @@ pub struct Filter {
     pub bg: Vector3<f64>,
     /// Heading source bias estimate, rad.
     pub bh: f64,
+    /// Heading deviation estimate `[a_ψ, c_ψ]`, rad.
+    pub dev: [f64; 2],
     /// Last bias-corrected angular rate, FRD, rad/s.
     pub omega_b: Vector3<f64>,
     /// Error covariance.
@@ -39,7 +43,11 @@ pub struct Filter {
 
 /// Zeroes the rows and columns of `idx` in `p` and sets their block to `cov`
 /// (a re-anchoring: that part of the state is now the measurement's).
-pub fn reset_block<const M: usize>(p: &mut Cov, idx: [usize; M], cov: &nalgebra::SMatrix<f64, M, M>) {
+pub fn reset_block<const M: usize>(
+    p: &mut Cov,
+    idx: [usize; M],
+    cov: &nalgebra::SMatrix<f64, M, M>,
+) {
     for &i in &idx {
         for j in 0..N {
             p[(i, j)] = 0.0;
@@ -56,23 +64,29 @@ pub fn reset_block<const M: usize>(p: &mut Cov, idx: [usize; M], cov: &nalgebra:
 impl Filter {
     /// `Ĉ_b^n`.
     pub fn c_nb(&self) -> Matrix3<f64> {
-        self.nav.q_nb.as_nalgebra().to_rotation_matrix().into_inner()
+        self.nav
+            .q_nb
+            .as_nalgebra()
+            .to_rotation_matrix()
+            .into_inner()
     }
 
     /// `R_N + h`, `(R_E + h) cos L`: metres per radian of latitude and of
     /// longitude.
     pub fn metres_per_rad(&self) -> (f64, f64) {
         let (l, h) = (self.nav.lat_rad, self.nav.height_m);
-        (
-            meridian_radius(l) + h,
-            (transverse_radius(l) + h) * l.cos(),
-        )
+        (meridian_radius(l) + h, (transverse_radius(l) + h) * l.cos())
     }
 
     /// One IMU sample: the strapdown with the bias-corrected sample
     /// (`f̃ − b̂_a`, `ω̃ − b̂_g`), its `f^n` into the covariance block, and the
     /// covariance step once the block holds `covariance_decimation` samples.
-    pub fn on_imu(&mut self, m: &Imu, cfg: &EkfConfig, bh_std: f64) -> Result<(), StrapdownError> {
+    pub fn on_imu(
+        &mut self,
+        m: &Imu,
+        cfg: &EkfConfig,
+        bh: HeadingBias,
+    ) -> Result<(), StrapdownError> {
         let w = m.gyro_rad_s.to_nalgebra() - self.bg;
         let f = m.accel_m_s2.to_nalgebra() - self.ba;
         let c_before = self.c_nb();
@@ -95,17 +109,24 @@ impl Filter {
             m.interval_s,
         );
         if self.block.samples >= cfg.covariance_decimation {
-            self.flush(cfg, bh_std);
+            self.flush(cfg, bh);
         }
         Ok(())
     }
 
     /// Propagates the covariance over the samples accumulated so far (before
     /// a measurement, so that it sees the covariance of its stamp).
-    pub fn flush(&mut self, cfg: &EkfConfig, bh_std: f64) {
+    pub fn flush(&mut self, cfg: &EkfConfig, bh: HeadingBias) {
         let g = normal_gravity(self.nav.lat_rad, self.nav.height_m);
         let w_ie = earth_rate_ned(self.nav.lat_rad);
-        propagate_covariance(&mut self.p, &mut self.block, cfg, bh_std, g / EARTH_RADIUS_M, &w_ie);
+        propagate_covariance(
+            &mut self.p,
+            &mut self.block,
+            cfg,
+            bh,
+            g / EARTH_RADIUS_M,
+            &w_ie,
+        );
     }
 
     /// Feeds the error-state estimate `dx` back (closed loop): attitude
@@ -132,6 +153,8 @@ impl Filter {
         self.ba += Vector3::new(dx[BA], dx[BA + 1], dx[BA + 2]);
         self.bg += Vector3::new(dx[BG], dx[BG + 1], dx[BG + 2]);
         self.bh += dx[BH];
+        self.dev[0] += dx[DA];
+        self.dev[1] += dx[DC];
         true
     }
 
@@ -144,6 +167,7 @@ impl Filter {
             accel_bias_m_s2: self.ba.into(),
             gyro_bias_rad_s: self.bg.into(),
             heading_bias_rad: self.bh,
+            heading_deviation_rad: self.dev,
             omega_b_rad_s: self.omega_b.into(),
             p_upper: upper(&self.p),
             block: self.block,
@@ -154,9 +178,12 @@ impl Filter {
     pub fn from_state(s: &FilterState) -> Option<Self> {
         let p = from_upper(&s.p_upper)?;
         // Kept bit for bit (the snapshot's check bounds the norm to 1e-6).
-        let q = Rotation::from_nalgebra(UnitQuaternion::new_unchecked(
-            Rotation::<crate::frames::Frd, crate::frames::Ned>::quaternion_from_wxyz(s.q_nb_wxyz),
-        ));
+        let q = Rotation::from_nalgebra(UnitQuaternion::new_unchecked(Rotation::<
+            crate::frames::Frd,
+            crate::frames::Ned,
+        >::quaternion_from_wxyz(
+            s.q_nb_wxyz
+        )));
         let [lat, lon, h] = s.lat_lon_height;
         let nav = StrapdownState {
             q_nb: q,
@@ -171,6 +198,7 @@ impl Filter {
             ba: s.accel_bias_m_s2.into(),
             bg: s.gyro_bias_rad_s.into(),
             bh: s.heading_bias_rad,
+            dev: s.heading_deviation_rad,
             omega_b: s.omega_b_rad_s.into(),
             p,
             block: s.block,

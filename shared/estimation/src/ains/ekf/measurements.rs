@@ -7,7 +7,7 @@
 use nalgebra::{Matrix1, Matrix2, Matrix3, SMatrix, Vector1, Vector2, Vector3};
 
 use super::filter::Filter;
-use super::model::{ATT, BG, BH, N, POS, VEL, skew};
+use super::model::{ATT, BG, BH, DA, DC, N, POS, VEL, skew};
 use super::params::EkfConfig;
 use crate::attitude::wrap_pi;
 
@@ -34,9 +34,11 @@ pub fn dvl(f: &Filter, cfg: &EkfConfig, z: &Vector3<f64>) -> Measurement<3> {
     let ct = c.transpose();
     let pred = mt * (ct * v + f.omega_b.cross(&cfg.dvl_lever_arm));
     let mut h = SMatrix::<f64, 3, N>::zeros();
-    h.fixed_view_mut::<3, 3>(0, ATT).copy_from(&(mt * ct * skew(&v)));
+    h.fixed_view_mut::<3, 3>(0, ATT)
+        .copy_from(&(mt * ct * skew(&v)));
     h.fixed_view_mut::<3, 3>(0, VEL).copy_from(&(mt * ct));
-    h.fixed_view_mut::<3, 3>(0, BG).copy_from(&(mt * skew(&cfg.dvl_lever_arm)));
+    h.fixed_view_mut::<3, 3>(0, BG)
+        .copy_from(&(mt * skew(&cfg.dvl_lever_arm)));
     Measurement {
         nu: z - pred,
         h,
@@ -83,7 +85,8 @@ pub fn horizontal(f: &Filter, lat: f64, lon: f64, r: Matrix2<f64>) -> Measuremen
 /// GPS velocity, NED: `H = [I₃]` on `δv`.
 pub fn velocity(f: &Filter, z: &Vector3<f64>, std: f64) -> Measurement<3> {
     let mut h = SMatrix::<f64, 3, N>::zeros();
-    h.fixed_view_mut::<3, 3>(0, VEL).copy_from(&Matrix3::identity());
+    h.fixed_view_mut::<3, 3>(0, VEL)
+        .copy_from(&Matrix3::identity());
     Measurement {
         nu: z - f.nav.v_ned_m_s.to_nalgebra(),
         h,
@@ -97,7 +100,7 @@ pub fn yaw(f: &Filter) -> f64 {
     c[(1, 0)].atan2(c[(0, 0)])
 }
 
-/// Heading `ψ̃ = ψ + b_ψ + w` (true heading; the AHRS's magnetic heading
+/// Heading `ψ̃ = ψ + b_ψ + a_ψ sin ψ + c_ψ cos ψ + w` (true heading; the AHRS's magnetic heading
 /// plus the declination). Derived from `ψ = atan2(C₂₁, C₁₁)` with
 /// `δC = [φ×] Ĉ`: `δψ = φ_D − C₃₁ (C₁₁ φ_N + C₂₁ φ_E) / (C₁₁² + C₂₁²)`
 /// (`= φ_D + tan θ (cos ψ φ_N + sin ψ φ_E)`; Groves eq. 16.? has the same
@@ -115,8 +118,12 @@ pub fn heading(f: &Filter, z: f64, std: f64) -> Option<Measurement<1>> {
     h[(0, ATT + 1)] = -c31 * c21 / d;
     h[(0, ATT + 2)] = 1.0;
     h[(0, BH)] = 1.0;
+    let psi = yaw(f);
+    let (sin, cos) = psi.sin_cos();
+    h[(0, DA)] = sin;
+    h[(0, DC)] = cos;
     Some(Measurement {
-        nu: Vector1::new(wrap_pi(z - yaw(f) - f.bh)),
+        nu: Vector1::new(wrap_pi(z - psi - f.bh - f.dev[0] * sin - f.dev[1] * cos)),
         h,
         r: Matrix1::new(std * std),
     })

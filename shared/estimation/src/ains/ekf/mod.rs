@@ -64,7 +64,7 @@ use crate::role::{Estimator, EstimatorError, Stamped};
 use crate::strapdown::{MAX_ABS_LATITUDE_RAD, StrapdownState};
 use filter::{Filter, reset_block};
 use measurements::Measurement;
-use model::{ATT, BA, BG, BH, Cov, POS, VEL};
+use model::{ATT, BA, BG, BH, Cov, DA, DC, HeadingBias, POS, VEL};
 use update::Gated;
 
 /// The aiding kinds, for the gate's counters.
@@ -293,13 +293,27 @@ impl Ekf {
         } else {
             HEADING_ATTITUDE
         };
-        p[(BH, BH)] = self.bh_std(source).powi(2);
+        // The initial yaw is the measured heading `ψ̃ = ψ + b_ψ + d(ψ) + w`,
+        // so its error `δψ = −(b_ψ + d + w)`: its variance holds the source's
+        // bias and deviation priors too, anti-correlated with them.
+        let (bh, dev) = (self.bh_std(source).powi(2), c.heading_deviation_std.powi(2));
+        let (sin, cos) = crate::attitude::to_euler(&q).2.sin_cos();
+        p[(BH, BH)] = bh;
+        p[(DA, DA)] = dev;
+        p[(DC, DC)] = dev;
+        p[(ATT + 2, ATT + 2)] += bh + dev;
+        for (k, g) in [(BH, 1.0), (DA, sin), (DC, cos)] {
+            let v = if k == BH { bh } else { dev };
+            p[(ATT + 2, k)] = -g * v;
+            p[(k, ATT + 2)] = -g * v;
+        }
         self.heading_source = source;
         self.filter = Some(Filter {
             nav,
             ba: Vector3::zeros(),
             bg: Vector3::zeros(),
             bh: 0.0,
+            dev: [0.0; 2],
             omega_b: Vector3::zeros(),
             p,
             block: Default::default(),
@@ -378,14 +392,13 @@ impl Ekf {
             if !self.try_initialise() {
                 return Ok(());
             }
-        } else if let Some(f) = self.filter.as_mut() {
-            let bh = if self.heading_source == HEADING_ATTITUDE {
-                self.config.attitude_heading_bias_std
-            } else {
-                self.config.heading_bias_std
+        } else {
+            let bh = self.bias_model(self.heading_source);
+            let cfg = self.config;
+            let Some(f) = self.filter.as_mut() else {
+                return Ok(());
             };
-            f.on_imu(m, &self.config, bh)
-                .map_err(|e| err("imu-refused", e))?;
+            f.on_imu(m, &cfg, bh).map_err(|e| err("imu-refused", e))?;
         }
         self.stats.imu_samples += 1;
         if let Some(f) = &self.filter {
@@ -394,18 +407,29 @@ impl Ekf {
         Ok(())
     }
 
-    /// The heading bias state's stationary σ for `source`.
-    fn bh_std(&self, source: u8) -> f64 {
+    /// The heading bias state's model for `source`.
+    fn bias_model(&self, source: u8) -> HeadingBias {
+        let c = &self.config;
         if source == HEADING_ATTITUDE {
-            self.config.attitude_heading_bias_std
+            HeadingBias {
+                std_rad: c.attitude_heading_bias_std,
+                time_s: c.attitude_heading_bias_time_s,
+            }
         } else {
-            self.config.heading_bias_std
+            HeadingBias {
+                std_rad: c.heading_bias_std,
+                time_s: c.heading_bias_time_s,
+            }
         }
+    }
+
+    fn bh_std(&self, source: u8) -> f64 {
+        self.bias_model(source).std_rad
     }
 
     fn flush(&mut self) {
         let cfg = self.config;
-        let bh = self.bh_std(self.heading_source);
+        let bh = self.bias_model(self.heading_source);
         if let Some(f) = self.filter.as_mut() {
             f.flush(&cfg, bh);
         }
@@ -434,10 +458,7 @@ impl Ekf {
     }
 
     fn on_depth(&mut self, d: &Depth, t: u64) {
-        let v_down = self
-            .filter
-            .as_ref()
-            .map_or(0.0, |f| f.nav.v_ned_m_s.z());
+        let v_down = self.filter.as_ref().map_or(0.0, |f| f.nav.v_ned_m_s.z());
         let at_surface = self
             .stamps
             .gps_seen
@@ -486,16 +507,25 @@ impl Ekf {
         self.stamps.gps_seen = Some(t);
         let s = g.horizontal_std_m.max(self.config.gps_std_floor);
         if self.filter.is_none() {
+            self.stamps.gps = Some(t);
             self.pending.position = Some([g.lat_rad, g.lon_rad, s, s, 0.0]);
             self.pending.velocity = g.velocity.map(|(v, s)| [v.x(), v.y(), v.z(), s]);
             return;
         }
-        if self.position(Kind::Gps, g.lat_rad, g.lon_rad, Matrix2::identity() * (s * s)) {
+        if self.position(
+            Kind::Gps,
+            g.lat_rad,
+            g.lon_rad,
+            Matrix2::identity() * (s * s),
+        ) {
             self.stamps.gps = Some(t);
         }
         if let Some((v, sv)) = g.velocity {
             let z = v.to_nalgebra();
-            let m = self.filter.as_ref().map(|f| measurements::velocity(f, &z, sv));
+            let m = self
+                .filter
+                .as_ref()
+                .map(|f| measurements::velocity(f, &z, sv));
             self.aid(Kind::GpsVelocity, m, |f, m| {
                 f.nav.v_ned_m_s = Vector::from_nalgebra(z);
                 reset_block(&mut f.p, [VEL, VEL + 1, VEL + 2], &m.r);
@@ -517,7 +547,9 @@ impl Ekf {
             x.std_east_m * x.std_east_m,
         );
         if self.filter.is_none() {
-            self.pending.position = Some([x.lat_rad, x.lon_rad, x.std_north_m, x.std_east_m, x.corr_ne]);
+            self.stamps.fix = Some(t);
+            self.pending.position =
+                Some([x.lat_rad, x.lon_rad, x.std_north_m, x.std_east_m, x.corr_ne]);
             return;
         }
         if self.position(Kind::Fix, x.lat_rad, x.lon_rad, r) {
@@ -540,22 +572,31 @@ impl Ekf {
         }
         self.stamps.heading_tried = Some(t);
         let bh_var = self.bh_std(source).powi(2);
+        let dev_var = self.config.heading_deviation_std.powi(2);
+        let source_prior =
+            SMatrix::<f64, 3, 3>::from_diagonal(&nalgebra::Vector3::new(bh_var, dev_var, dev_var));
         if self.heading_source != source {
             // Another source, another error: its bias starts afresh.
             if let Some(f) = self.filter.as_mut() {
                 f.bh = 0.0;
-                reset_block(&mut f.p, [BH], &SMatrix::<f64, 1, 1>::new(bh_var));
+                f.dev = [0.0; 2];
+                reset_block(&mut f.p, [BH, DA, DC], &source_prior);
             }
             self.heading_source = source;
         }
-        let m = self.filter.as_ref().and_then(|f| measurements::heading(f, z, std));
+        let m = self
+            .filter
+            .as_ref()
+            .and_then(|f| measurements::heading(f, z, std));
         self.flush();
         if self.aid(Kind::Heading, m, |f, m| {
             let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), m.nu[0])
                 * f.nav.q_nb.as_nalgebra();
             f.nav.q_nb = Rotation::from_nalgebra(q);
+            f.bh = 0.0;
+            f.dev = [0.0; 2];
             reset_block(&mut f.p, [ATT + 2], &m.r);
-            reset_block(&mut f.p, [BH], &SMatrix::<f64, 1, 1>::new(bh_var));
+            reset_block(&mut f.p, [BH, DA, DC], &source_prior);
             true
         }) {
             self.stamps.heading = Some(t);
@@ -567,6 +608,7 @@ impl Ekf {
         let s = a.std_rad.to_array();
         if self.filter.is_none() {
             let q = a.attitude.to_wxyz();
+            self.stamps.heading = Some(t);
             self.pending.attitude = Some([q[0], q[1], q[2], q[3], s[0], s[1], s[2]]);
             self.pending.from_ahrs = false;
             return;
@@ -582,6 +624,7 @@ impl Ekf {
             return; // the attitude estimate is the heading source
         }
         if self.filter.is_none() {
+            self.stamps.heading = Some(t);
             self.pending.attitude = Some([a.roll_rad, a.pitch_rad, yaw, 0.0, 0.0, 0.0, 0.0]);
             self.pending.from_ahrs = true;
             return;
@@ -676,9 +719,9 @@ impl Estimator for Ekf {
             )));
         }
         let filter = match &s.filter {
-            Some(fs) => Some(
-                Filter::from_state(fs).ok_or_else(|| refused(&"navigation state refused"))?,
-            ),
+            Some(fs) => {
+                Some(Filter::from_state(fs).ok_or_else(|| refused(&"navigation state refused"))?)
+            }
             None => None,
         };
         self.filter = filter;

@@ -1,4 +1,4 @@
-//! The error-state model: the 16 error states, their continuous system
+//! The error-state model: the 18 error states, their continuous system
 //! matrix `F` and noise, and the covariance propagation over a block of
 //! IMU samples.
 //!
@@ -12,6 +12,7 @@
 //! | 9-11  | `δb_a`, accelerometer bias error, FRD | m/s² |
 //! | 12-14 | `δb_g`, gyro bias error, FRD | rad/s |
 //! | 15    | `b_ψ`, the heading source's slowly varying error | rad |
+//! | 16-17 | `a_ψ`, `c_ψ`, its one-cycle deviation `a_ψ sin ψ + c_ψ cos ψ` | rad |
 //!
 //! The first 15 are the standard INS error state of Groves (2013) §14.2.4
 //! (local-navigation-frame error model, eqs. 14.63-14.72) and Farrell
@@ -20,7 +21,12 @@
 //! eq. 3.19) for the heading measurement's correlated error: without it a
 //! compass whose error wanders by a degree or two for minutes would be
 //! taken as white noise, the yaw σ would shrink to a tenth of a degree and
-//! the published position σ would not cover the cross-track error.
+//! the published position σ would not cover the cross-track error. The
+//! 17th and 18th are the classical one-cycle compass deviation (the error
+//! of a residual hard iron, a function of the heading: Groves §6.1.3,
+//! random constants): on parallel transects flown in alternate directions a
+//! constant heading error cancels from leg to leg but a deviation does not,
+//! and without these states the position σ would not grow with it.
 //!
 //! **System matrix** (our signs, from the definitions above; Groves's
 //! eqs. 14.64-14.67 differ in sign because his `δb` is estimate minus truth
@@ -53,7 +59,7 @@ use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use super::params::EkfConfig;
 
 /// Number of error states.
-pub const N: usize = 16;
+pub const N: usize = 18;
 /// Attitude error `φ`.
 pub const ATT: usize = 0;
 /// Velocity error `δv`.
@@ -66,6 +72,10 @@ pub const BA: usize = 9;
 pub const BG: usize = 12;
 /// Heading measurement bias.
 pub const BH: usize = 15;
+/// Heading deviation, sine coefficient.
+pub const DA: usize = 16;
+/// Heading deviation, cosine coefficient.
+pub const DC: usize = 17;
 
 /// The error covariance.
 pub type Cov = SMatrix<f64, N, N>;
@@ -107,8 +117,18 @@ impl Block {
     }
 }
 
+/// The heading bias state's Gauss-Markov model: stationary σ, rad, and
+/// correlation time, s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadingBias {
+    /// Stationary σ, rad.
+    pub std_rad: f64,
+    /// Correlation time, s.
+    pub time_s: f64,
+}
+
 /// The continuous-time noise spectral densities, diagonal of `Q_c`.
-fn q_c(cfg: &EkfConfig, bh_std: f64) -> SVector<f64, N> {
+fn q_c(cfg: &EkfConfig, bh: HeadingBias) -> SVector<f64, N> {
     let mut q = SVector::<f64, N>::zeros();
     for i in 0..3 {
         q[ATT + i] = cfg.gyro_noise * cfg.gyro_noise;
@@ -116,7 +136,7 @@ fn q_c(cfg: &EkfConfig, bh_std: f64) -> SVector<f64, N> {
         q[BA + i] = cfg.accel_bias_walk * cfg.accel_bias_walk;
         q[BG + i] = cfg.gyro_bias_walk * cfg.gyro_bias_walk;
     }
-    q[BH] = 2.0 * bh_std * bh_std / cfg.heading_bias_time_s;
+    q[BH] = 2.0 * bh.std_rad * bh.std_rad / bh.time_s;
     q
 }
 
@@ -128,10 +148,13 @@ fn f_t(b: &Block, gamma_over_r: f64, w_ie: &Vector3<f64>, tau_h: f64) -> Cov {
     let w_dt = Vector3::from(b.w_dt);
     let c_dt = Matrix3::from_row_slice(&b.c_dt);
     let t = b.t_s;
-    f.fixed_view_mut::<3, 3>(ATT, ATT).copy_from(&(-skew(&w_dt)));
+    f.fixed_view_mut::<3, 3>(ATT, ATT)
+        .copy_from(&(-skew(&w_dt)));
     f.fixed_view_mut::<3, 3>(ATT, BG).copy_from(&(-c_dt));
-    f.fixed_view_mut::<3, 3>(VEL, ATT).copy_from(&(-skew(&f_dt)));
-    f.fixed_view_mut::<3, 3>(VEL, VEL).copy_from(&(-2.0 * t * skew(w_ie)));
+    f.fixed_view_mut::<3, 3>(VEL, ATT)
+        .copy_from(&(-skew(&f_dt)));
+    f.fixed_view_mut::<3, 3>(VEL, VEL)
+        .copy_from(&(-2.0 * t * skew(w_ie)));
     f[(VEL + 2, POS + 2)] = 2.0 * gamma_over_r * t;
     f.fixed_view_mut::<3, 3>(VEL, BA).copy_from(&(-c_dt));
     for i in 0..3 {
@@ -142,13 +165,13 @@ fn f_t(b: &Block, gamma_over_r: f64, w_ie: &Vector3<f64>, tau_h: f64) -> Cov {
 }
 
 /// Propagates `p` over the block `b` (module docs) and empties the block;
-/// `bh_std` is the heading bias state's stationary σ (it depends on the
-/// heading source).
+/// `bh` is the heading bias state's model (it depends on the heading
+/// source).
 pub fn propagate_covariance(
     p: &mut Cov,
     b: &mut Block,
     cfg: &EkfConfig,
-    bh_std: f64,
+    bh: HeadingBias,
     gamma_over_r: f64,
     w_ie: &Vector3<f64>,
 ) {
@@ -156,10 +179,10 @@ pub fn propagate_covariance(
         *b = Block::default();
         return;
     }
-    let ft = f_t(b, gamma_over_r, w_ie, cfg.heading_bias_time_s);
+    let ft = f_t(b, gamma_over_r, w_ie, bh.time_s);
     let phi = Cov::identity() + ft + 0.5 * ft * ft;
     let mut next = phi * *p * phi.transpose();
-    let q = q_c(cfg, bh_std);
+    let q = q_c(cfg, bh);
     for i in 0..N {
         next[(i, i)] += q[i] * b.t_s;
     }

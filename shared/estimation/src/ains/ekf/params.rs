@@ -49,10 +49,17 @@ pub struct EkfParams {
     /// ... and this correlation time, s. Default 600.
     pub heading_bias_time_s: f64,
     /// The stationary σ of that state while the attitude estimate is the
-    /// heading source, rad. Default 0.0026 (0.15°: the attitude role's
-    /// `mekf` and `pf` with a calibrated magnetometer hold the survey's
-    /// yaw to about 0.1° RMS, test `explore_heading_sources`).
+    /// heading source, rad. Default 0.0052 (0.3°, our choice: the
+    /// attitude role's `mekf` with a calibrated magnetometer publishes a
+    /// yaw σ of about 0.1° on the survey, and its realised error is
+    /// correlated over minutes and at times twice that).
     pub attitude_heading_bias_std_rad: f64,
+    /// ... and its correlation time, s. Default 300 (our choice).
+    pub attitude_heading_bias_time_s: f64,
+    /// The heading source's one-cycle deviation (a residual hard iron):
+    /// prior σ of each coefficient, rad. Default 0.0052 (0.3°, our choice:
+    /// a compass calibrated to a few tenths of a degree).
+    pub heading_deviation_std_rad: f64,
     /// White noise of the AHRS heading, rad. Default 0.0175 (1°).
     pub ahrs_heading_std_rad: f64,
     /// Smallest white noise σ of the attitude estimate's yaw, rad (its
@@ -114,7 +121,9 @@ impl Default for EkfParams {
             initial_tilt_std_rad: 0.0087,
             heading_bias_std_rad: 0.035,
             heading_bias_time_s: 600.0,
-            attitude_heading_bias_std_rad: 0.0026,
+            attitude_heading_bias_std_rad: 0.0052,
+            attitude_heading_bias_time_s: 300.0,
+            heading_deviation_std_rad: 0.0052,
             ahrs_heading_std_rad: 0.0175,
             attitude_heading_std_floor_rad: 0.0017,
             heading_interval_s: 1.0,
@@ -175,6 +184,8 @@ pub struct EkfConfig {
     pub(super) heading_bias_std: f64,
     pub(super) heading_bias_time_s: f64,
     pub(super) attitude_heading_bias_std: f64,
+    pub(super) attitude_heading_bias_time_s: f64,
+    pub(super) heading_deviation_std: f64,
     pub(super) ahrs_heading_std: f64,
     pub(super) attitude_heading_std_floor: f64,
     pub(super) heading_interval_ns: u64,
@@ -198,7 +209,13 @@ fn ns(s: f64) -> u64 {
     (s * 1e9).round() as u64
 }
 
-fn count(name: &'static str, v: u64, lo: u64, hi: u64, range: &'static str) -> Result<u64, EkfParamsError> {
+fn count(
+    name: &'static str,
+    v: u64,
+    lo: u64,
+    hi: u64,
+    range: &'static str,
+) -> Result<u64, EkfParamsError> {
     if (lo..=hi).contains(&v) {
         Ok(v)
     } else {
@@ -224,7 +241,9 @@ impl EkfParams {
             }
         }
         let [r, p, y] = self.dvl_misalignment_rad;
-        let dvl_to_body = crate::attitude::from_euler(r, p, y).to_rotation_matrix().into_inner();
+        let dvl_to_body = crate::attitude::from_euler(r, p, y)
+            .to_rotation_matrix()
+            .into_inner();
         let mut gate = [0.0; 3];
         for (g, v) in gate.iter_mut().zip(self.gate_chi2) {
             *g = positive("gate_chi2", v)?;
@@ -243,7 +262,10 @@ impl EkfParams {
                 "initial_accel_bias_std_m_s2",
                 self.initial_accel_bias_std_m_s2,
             )?,
-            initial_velocity_std: positive("initial_velocity_std_m_s", self.initial_velocity_std_m_s)?,
+            initial_velocity_std: positive(
+                "initial_velocity_std_m_s",
+                self.initial_velocity_std_m_s,
+            )?,
             initial_tilt_std: angle("initial_tilt_std_rad", self.initial_tilt_std_rad)?,
             heading_bias_std: in_range(
                 "heading_bias_std_rad",
@@ -269,6 +291,22 @@ impl EkfParams {
                 false,
                 "[0, 1] rad",
             )?,
+            attitude_heading_bias_time_s: in_range(
+                "attitude_heading_bias_time_s",
+                self.attitude_heading_bias_time_s,
+                0.0,
+                f64::INFINITY,
+                true,
+                "(0, inf] s",
+            )?,
+            heading_deviation_std: in_range(
+                "heading_deviation_std_rad",
+                self.heading_deviation_std_rad,
+                0.0,
+                1.0,
+                false,
+                "[0, 1] rad",
+            )?,
             ahrs_heading_std: angle("ahrs_heading_std_rad", self.ahrs_heading_std_rad)?,
             attitude_heading_std_floor: angle(
                 "attitude_heading_std_floor_rad",
@@ -285,7 +323,14 @@ impl EkfParams {
             dvl_std: positive("dvl_std_m_s", self.dvl_std_m_s)?,
             dvl_lever_arm: Vector3::from(self.dvl_lever_arm_m),
             dvl_to_body,
-            max_speed_m_s: in_range("max_speed_m_s", self.max_speed_m_s, 0.0, 100.0, true, "(0, 100]")?,
+            max_speed_m_s: in_range(
+                "max_speed_m_s",
+                self.max_speed_m_s,
+                0.0,
+                100.0,
+                true,
+                "(0, 100]",
+            )?,
             depth_std: positive("depth_std_m", self.depth_std_m)?,
             surface_window_ns: ns(in_range(
                 "surface_window_s",
@@ -303,7 +348,13 @@ impl EkfParams {
                 false,
                 "[0, 10]",
             )?,
-            tare_samples: count("tare_samples", self.tare_samples, 1, 1_000_000, "[1, 1000000]")?,
+            tare_samples: count(
+                "tare_samples",
+                self.tare_samples,
+                1,
+                1_000_000,
+                "[1, 1000000]",
+            )?,
             gps_std_floor: positive("gps_std_floor_m", self.gps_std_floor_m)?,
             gate_chi2: gate,
             max_consecutive_rejections: count(

@@ -1,7 +1,7 @@
 //! The `ekf` estimator's state as plain data ([`EkfSnapshot`]) for warm
 //! restart and hot swap, its counters ([`EkfStats`]), and its checks.
 //!
-//! The covariance is stored as its upper triangle (136 numbers for 16
+//! The covariance is stored as its upper triangle (171 numbers for 18
 //! states), so that the snapshot, bincode-encoded with fixed-width
 //! integers, fits the `AinsSnapshot` message's 2304 bytes (test
 //! `snapshot_fits_the_message_and_restores_bit_for_bit`).
@@ -66,6 +66,8 @@ pub struct FilterState {
     pub gyro_bias_rad_s: [f64; 3],
     /// Heading source's bias estimate, rad.
     pub heading_bias_rad: f64,
+    /// Heading source's one-cycle deviation `[a_ψ, c_ψ]`, rad.
+    pub heading_deviation_rad: [f64; 2],
     /// The last IMU sample's bias-corrected angular rate, FRD, rad/s (the
     /// DVL lever arm's rotation term).
     pub omega_b_rad_s: [f64; 3],
@@ -140,7 +142,7 @@ pub enum EkfSnapshotError {
     #[error("snapshot value out of range: {0}")]
     OutOfRange(&'static str),
     /// The covariance is not one.
-    #[error("snapshot covariance has {0} numbers or a negative diagonal (16 states: 136)")]
+    #[error("snapshot covariance has {0} numbers or a negative diagonal (18 states: 171)")]
     NotCovariance(usize),
 }
 
@@ -189,6 +191,7 @@ impl FilterState {
         finite("accel_bias_m_s2", &self.accel_bias_m_s2)?;
         finite("gyro_bias_rad_s", &self.gyro_bias_rad_s)?;
         finite("heading_bias_rad", &[self.heading_bias_rad])?;
+        finite("heading_deviation_rad", &self.heading_deviation_rad)?;
         finite("omega_b_rad_s", &self.omega_b_rad_s)?;
         finite("p_upper", &self.p_upper)?;
         finite("block", &self.block.f_dt)?;
@@ -202,8 +205,8 @@ impl FilterState {
         if self.lat_lon_height[0].abs() > crate::strapdown::MAX_ABS_LATITUDE_RAD {
             return Err(EkfSnapshotError::OutOfRange("latitude"));
         }
-        let p = from_upper(&self.p_upper)
-            .ok_or(EkfSnapshotError::NotCovariance(self.p_upper.len()))?;
+        let p =
+            from_upper(&self.p_upper).ok_or(EkfSnapshotError::NotCovariance(self.p_upper.len()))?;
         if (0..N).any(|i| p[(i, i)] < 0.0) {
             return Err(EkfSnapshotError::NotCovariance(self.p_upper.len()));
         }

@@ -1,0 +1,83 @@
+//! The `ekf` aided INS over the whole survey, without position aiding, for
+//! several seeds: the issue's figures per seed, and the time in the
+//! estimator per IMU sample.
+//!
+//! `cargo run --release -p nauta-estimation --example ains_ekf_survey -- [FIRST [COUNT [HEADING]]]`
+//! (default: seeds 100-109, HEADING `mekf`; also `pf`, `ahrs`).
+
+#[path = "../tests/ains_ekf/harness.rs"]
+#[allow(dead_code)]
+mod harness;
+
+use harness::*;
+use nauta_estimation::ains::ekf::EkfParams;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let first: u64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(100);
+    let count: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10);
+    let heading = args.get(3).map_or("mekf", String::as_str).to_string();
+    let params = EkfParams {
+        position_aiding: false,
+        ..Default::default()
+    };
+    let seeds: Vec<u64> = (first..first + count).collect();
+    let half = seeds.len().div_ceil(2);
+    let (a, b) = seeds.split_at(half);
+    let one = |seed: u64| {
+        let h = match heading.as_str() {
+            "pf" => attitude_pf(),
+            "ahrs" => Heading::Ahrs,
+            _ => attitude_mekf(),
+        };
+        let mut sensors = nauta_sim::suite::SuiteConfig::survey();
+        if std::env::var("NO_IMU_SF").is_ok() {
+            sensors.imu.gyro.scale_factor_sigma = 0.0;
+            sensors.imu.accel.scale_factor_sigma = 0.0;
+        }
+        if std::env::var("NO_IMU_BIAS").is_ok() {
+            sensors.imu.gyro.bias_instability = 0.0;
+            sensors.imu.accel.bias_instability = 0.0;
+        }
+        if std::env::var("NO_DVL_SF").is_ok() {
+            sensors.dvl.noise.scale_factor_sigma = 0.0;
+        }
+        (seed, run_with(seed, 3000.0, &params, h, sensors, None))
+    };
+    let results = std::thread::scope(|s| {
+        let h = s.spawn(|| b.iter().map(|&k| one(k)).collect::<Vec<_>>());
+        let mut r: Vec<_> = a.iter().map(|&k| one(k)).collect();
+        r.extend(h.join().expect("thread"));
+        r
+    });
+    let mut pass = 0;
+    for (seed, f) in &results {
+        let d = f.dive_drift_m_per_km();
+        let ok = (0..3)
+            .all(|k| d[k] <= 5.0 && f.slope_m_per_km[k].abs() <= 5.0 && f.vel_rms_m_s[k] <= 0.010)
+            && (0.90..=0.98).contains(&f.inside_95);
+        pass += ok as usize;
+        println!(
+            "seed {seed} {heading}: yaw mean N/S/other source {:.3?} ekf {:.3?} | end drift N/E/D {:.2}/{:.2}/{:.2} m/km | slope {:.2}/{:.2}/{:.2} m/km | \
+             vel RMS {:.4}/{:.4}/{:.4} m/s | inside 95 % {:.1} % | yaw RMS {:.3}° σ {:.3}° | \
+             {:.2} µs/IMU | all targets {}",
+            f.legs.map(|l| (l[0] / l[1].max(1.0)).to_degrees()),
+            f.legs.map(|l| (l[2] / l[3].max(1.0)).to_degrees()),
+            d[0],
+            d[1],
+            d[2],
+            f.slope_m_per_km[0],
+            f.slope_m_per_km[1],
+            f.slope_m_per_km[2],
+            f.vel_rms_m_s[0],
+            f.vel_rms_m_s[1],
+            f.vel_rms_m_s[2],
+            100.0 * f.inside_95,
+            f.yaw_rms_rad[0].to_degrees(),
+            f.yaw_rms_rad[1].to_degrees(),
+            f.us_per_imu(),
+            if ok { "met" } else { "NOT met" },
+        );
+    }
+    println!("{pass} of {} seeds meet every target", results.len());
+}
