@@ -32,21 +32,22 @@ pub fn calibrated_magnetometer() -> MagnetometerParams {
 
 /// The attitude role's `pf` (default, `alignment_samples = 400` as the
 /// shipped manifests) with the calibrated magnetometer.
+#[allow(dead_code)] // the example's `pf` heading
 pub fn attitude_pf() -> Heading {
-    Heading::Attitude(VariantParams::Pf(PfVariantParams {
+    Heading::Attitude(Box::new(VariantParams::Pf(PfVariantParams {
         alignment_samples: 400,
         magnetometer: calibrated_magnetometer(),
         ..Default::default()
-    }))
+    })))
 }
 
 /// The same with the `mekf`.
 pub fn attitude_mekf() -> Heading {
-    Heading::Attitude(VariantParams::Mekf(MekfVariantParams {
+    Heading::Attitude(Box::new(VariantParams::Mekf(MekfVariantParams {
         alignment_samples: 400,
         magnetometer: calibrated_magnetometer(),
         ..Default::default()
-    }))
+    })))
 }
 
 /// Where the heading aiding comes from.
@@ -56,7 +57,7 @@ pub enum Heading {
     Ahrs,
     /// The attitude role's core of these parameters, run in-process on
     /// the same IMU samples (and the AHRS, which the EKF then ignores).
-    Attitude(VariantParams),
+    Attitude(Box<VariantParams>),
 }
 
 /// One step's readings as inputs, appended to `out` (the attitude

@@ -28,6 +28,7 @@ impl ser::Error for Never {
 }
 
 /// The byte counter.
+#[derive(Debug)]
 pub struct Size(pub usize);
 
 /// The encoded size of `v`, bytes.
@@ -43,7 +44,7 @@ macro_rules! fixed {
     };
 }
 
-impl<'a> ser::Serializer for &'a mut Size {
+impl ser::Serializer for &mut Size {
     type Ok = ();
     type Error = Never;
     type SerializeSeq = Self;
@@ -155,7 +156,7 @@ impl<'a> ser::Serializer for &'a mut Size {
 
 macro_rules! compound {
     ($tr:ident, $m:ident) => {
-        impl<'a> ser::$tr for &'a mut Size {
+        impl ser::$tr for &mut Size {
             type Ok = ();
             type Error = Never;
             fn $m<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<(), Never> {
@@ -173,7 +174,7 @@ compound!(SerializeTuple, serialize_element);
 compound!(SerializeTupleStruct, serialize_field);
 compound!(SerializeTupleVariant, serialize_field);
 
-impl<'a> ser::SerializeMap for &'a mut Size {
+impl ser::SerializeMap for &mut Size {
     type Ok = ();
     type Error = Never;
     fn serialize_key<T: ?Sized + Serialize>(&mut self, k: &T) -> Result<(), Never> {
@@ -187,7 +188,7 @@ impl<'a> ser::SerializeMap for &'a mut Size {
     }
 }
 
-impl<'a> ser::SerializeStruct for &'a mut Size {
+impl ser::SerializeStruct for &mut Size {
     type Ok = ();
     type Error = Never;
     fn serialize_field<T: ?Sized + Serialize>(
@@ -202,7 +203,7 @@ impl<'a> ser::SerializeStruct for &'a mut Size {
     }
 }
 
-impl<'a> ser::SerializeStructVariant for &'a mut Size {
+impl ser::SerializeStructVariant for &mut Size {
     type Ok = ();
     type Error = Never;
     fn serialize_field<T: ?Sized + Serialize>(

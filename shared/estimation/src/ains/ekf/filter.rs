@@ -1,7 +1,7 @@
 //! The running filter: the total (nominal) navigation state on the WGS84
 //! strapdown, the bias estimates, the error covariance, and the closed-loop
 //! correction that feeds an error-state estimate back into them (Groves
-//! 2013 §14.1.1, closed-loop correction: the error state is zero after
+//! 2013 ch. 14, closed-loop correction: the error state is zero after
 //! every update, so it is not kept).
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};

@@ -1,8 +1,8 @@
 //! The aiding measurements' models: residual `ν = z − ẑ`, Jacobian `H`
 //! with respect to the error state ([`super::model`]) and noise `R`
-//! (Groves 2013 ch. 16 for the DVL and depth, §14.3 for position, and
-//! §16.? "heading" for the compass; derivations below are ours for our
-//! error-state signs).
+//! (Groves 2013 ch. 16, multisensor integration, for the DVL, depth and
+//! compass, ch. 14 for position; the Jacobians below are derived here for
+//! our error-state signs).
 
 use nalgebra::{Matrix1, Matrix2, Matrix3, SMatrix, Vector1, Vector2, Vector3};
 
@@ -22,8 +22,8 @@ pub struct Measurement<const M: usize> {
     pub r: SMatrix<f64, M, M>,
 }
 
-/// DVL bottom-track velocity in the DVL frame (Groves §16.? / eq. 16.?, the
-/// Doppler velocity with lever arm: `ṽ_d = M_bᵀ (C_b^nᵀ v^n + ω_nb^b × l)`,
+/// DVL bottom-track velocity in the DVL frame (the Doppler velocity with
+/// lever arm: `ṽ_d = M_bᵀ (C_b^nᵀ v^n + ω_nb^b × l)`,
 /// `M_b` the DVL → body rotation, `l` the lever arm). With
 /// `C = (I + [φ×]) Ĉ`: `C_b^nᵀ v = Ĉᵀ v̂ + Ĉᵀ δv + Ĉᵀ [v̂ ×] φ`, and with
 /// `ω = ω̂ − δb_g`: `ω × l = ω̂ × l + [l ×] δb_g`.
@@ -65,8 +65,8 @@ pub fn depth(f: &Filter, cfg: &EkfConfig, z: f64) -> Measurement<1> {
 
 /// Horizontal position (GPS or a fix) of covariance `r`, NED metres: the
 /// residual is the offset of the measured latitude and longitude from the
-/// estimate, `(ΔL (R_N + h), Δλ (R_E + h) cos L)` (Groves eq. 2.119's
-/// curvilinear-to-local scaling); `H = [I₂]` on `δp_N, δp_E`.
+/// estimate, `(ΔL (R_N + h), Δλ (R_E + h) cos L)` (the curvilinear-to-local
+/// scaling, Groves ch. 2); `H = [I₂]` on `δp_N, δp_E`.
 pub fn horizontal(f: &Filter, lat: f64, lon: f64, r: Matrix2<f64>) -> Measurement<2> {
     let (m_lat, m_lon) = f.metres_per_rad();
     let mut h = SMatrix::<f64, 2, N>::zeros();
@@ -103,8 +103,7 @@ pub fn yaw(f: &Filter) -> f64 {
 /// Heading `ψ̃ = ψ + b_ψ + a_ψ sin ψ + c_ψ cos ψ + w` (true heading; the AHRS's magnetic heading
 /// plus the declination). Derived from `ψ = atan2(C₂₁, C₁₁)` with
 /// `δC = [φ×] Ĉ`: `δψ = φ_D − C₃₁ (C₁₁ φ_N + C₂₁ φ_E) / (C₁₁² + C₂₁²)`
-/// (`= φ_D + tan θ (cos ψ φ_N + sin ψ φ_E)`; Groves eq. 16.? has the same
-/// form for a magnetic heading measurement). `None` within 0.6° of
+/// (`= φ_D + tan θ (cos ψ φ_N + sin ψ φ_E)`). `None` within 0.6° of
 /// vertical pitch, where the heading is not defined.
 pub fn heading(f: &Filter, z: f64, std: f64) -> Option<Measurement<1>> {
     let c = f.c_nb();

@@ -5,8 +5,9 @@
 //!   [`crate::strapdown::propagate`] on the bias-corrected sample.
 //! - **Error model** ([`model`]): 15 INS error states (attitude, velocity,
 //!   position in NED metres, accelerometer and gyro biases; Groves 2013
-//!   §14.2.4, Farrell 2008 §11.2) and a 16th, the heading source's slowly
-//!   varying error (a Gauss-Markov state). The covariance is propagated
+//!   ch. 14, Farrell 2008 ch. 11), a 16th, the heading source's slowly
+//!   varying error (a Gauss-Markov state), and a 17th and 18th, its
+//!   one-cycle deviation with the heading (a residual hard iron). The covariance is propagated
 //!   every `covariance_decimation` IMU samples (10: 10 Hz at a 100 Hz IMU)
 //!   with the block's mean transition, and before every measurement.
 //! - **Aiding** ([`measurements`], [`update`]): DVL body velocity (bottom

@@ -14,43 +14,47 @@
 //! | 15    | `b_ψ`, the heading source's slowly varying error | rad |
 //! | 16-17 | `a_ψ`, `c_ψ`, its one-cycle deviation `a_ψ sin ψ + c_ψ cos ψ` | rad |
 //!
-//! The first 15 are the standard INS error state of Groves (2013) §14.2.4
-//! (local-navigation-frame error model, eqs. 14.63-14.72) and Farrell
-//! (2008) §11.2 (the linearised NED error equations, there with position
-//! in metres); the 16th is a first-order Gauss-Markov state (Groves §3.2.2,
-//! eq. 3.19) for the heading measurement's correlated error: without it a
+//! The first 15 are the standard INS error state of Groves (2013) ch. 14
+//! (INS/GNSS integration: the local-navigation-frame system model of
+//! §14.2) and Farrell (2008) ch. 11 (the linearised NED error equations,
+//! there with the position error in metres). Equation numbers are left
+//! out: the signs below are derived here for our definitions, and the
+//! books' numbering is not at hand to check. The 16th is a first-order
+//! Gauss-Markov state (Groves ch. 3, the Kalman filter's system models)
+//! for the heading measurement's correlated error: without it a
 //! compass whose error wanders by a degree or two for minutes would be
 //! taken as white noise, the yaw σ would shrink to a tenth of a degree and
 //! the published position σ would not cover the cross-track error. The
 //! 17th and 18th are the classical one-cycle compass deviation (the error
-//! of a residual hard iron, a function of the heading: Groves §6.1.3,
-//! random constants): on parallel transects flown in alternate directions a
+//! of a residual hard iron, a function of the heading, Groves §6.1 on
+//! magnetic heading; random constants): on parallel transects flown in alternate directions a
 //! constant heading error cancels from leg to leg but a deviation does not,
 //! and without these states the position σ would not grow with it.
 //!
 //! **System matrix** (our signs, from the definitions above; Groves's
-//! eqs. 14.64-14.67 differ in sign because his `δb` is estimate minus truth
-//! and his `δψ` the opposite rotation):
+//! attitude and bias errors are defined the other way round, so his
+//! matrices differ in sign):
 //!
 //! ```text
-//! φ̇   = −[ω_in^n ×] φ − Ĉ_b^n δb_g − Ĉ_b^n w_g                     (14.64)
-//! δv̇  = −[f^n ×] φ − 2[ω_ie^n ×] δv + (2γ/R) δp_D e_D − Ĉ_b^n δb_a − Ĉ_b^n w_a   (14.65)
-//! δṗ  = δv                                                         (Farrell 11.2, metres)
-//! δḃ_a = w_ba,   δḃ_g = w_bg                                        (random walks, Groves 14.70)
-//! ḃ_ψ = −b_ψ / τ_ψ + w_ψ,   E[w_ψ²] = 2σ_ψ²/τ_ψ                     (Groves eq. 3.19)
+//! φ̇   = −[ω_in^n ×] φ − Ĉ_b^n δb_g − Ĉ_b^n w_g
+//! δv̇  = −[f^n ×] φ − 2[ω_ie^n ×] δv + (2γ/R) δp_D e_D − Ĉ_b^n δb_a − Ĉ_b^n w_a
+//! δṗ  = δv                                   (NED metres, as Farrell)
+//! δḃ_a = w_ba,   δḃ_g = w_bg                 (random walks)
+//! ḃ_ψ = −b_ψ / τ_ψ + w_ψ,   E[w_ψ²] = 2σ_ψ²/τ_ψ   (Gauss-Markov)
+//! ȧ_ψ = ċ_ψ = 0                              (random constants)
 //! ```
 //!
 //! Left out (below a centimetre over a survey with DVL aiding): the
 //! transport-rate and Earth-rate terms in the position and velocity errors
-//! (Groves's `F_12`, `F_13`, `F_23` latitude terms) and the attitude error's
+//! (the latitude-error terms of the full model) and the attitude error's
 //! coupling to the velocity error through `ω_en`.
 //!
-//! **Discretisation** (Groves §3.2.3, eqs. 3.34 and 3.46, and §14.2.4's
-//! reduced-rate propagation): over a block of `N` IMU samples of total
+//! **Discretisation** (Groves ch. 3, the transition matrix as a truncated
+//! power series of `F Δt` and the first-order system noise `Q_c Δt`; ch. 14
+//! on propagating the covariance at a lower rate than the navigation): over a block of `N` IMU samples of total
 //! length `T`, `F̄` is `F` at the block's mean `f^n` and mean `Ĉ_b^n`
 //! (`Σ F_k Δt_k = F̄ T` exactly, since `F` is linear in both), and
-//! `Φ = I + F̄T + ½(F̄T)²`, `Q_d = Q_c T` (the first-order form, Groves
-//! eq. 14.82). With `N = 10` at 100 Hz the block is 0.1 s, far below the
+//! `Φ = I + F̄T + ½(F̄T)²`, `Q_d = Q_c T`. With `N = 10` at 100 Hz the block is 0.1 s, far below the
 //! 84-minute Schuler period and every other time constant of the error
 //! model.
 

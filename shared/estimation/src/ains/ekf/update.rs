@@ -1,8 +1,9 @@
 //! The gated Kalman measurement update of the error state (Groves 2013
-//! §3.2.4: `K = P Hᵀ S⁻¹`, `δx̂ = K ν`, and the covariance in the
+//! ch. 3: `K = P Hᵀ S⁻¹`, `δx̂ = K ν`, and the covariance in the
 //! symmetric form `P⁺ = P − K S Kᵀ`, symmetrised; the Joseph form costs
 //! three 18×18 products per update, this one an outer product), with the
-//! normalised-innovation gate of Groves §17.3.1 (eq. 17.59:
+//! normalised-innovation gate of Groves ch. 17 (innovation-based fault
+//! detection:
 //! `νᵀ S⁻¹ ν`, `S = H P Hᵀ + R`, against a χ² quantile).
 
 use nalgebra::{SMatrix, SVector};
@@ -44,7 +45,7 @@ pub fn update<const M: usize>(
     if gate.is_some_and(|g| nis > g) {
         return Gated::Rejected(nis);
     }
-    // K = P Hᵀ S⁻¹ (eq. 3.39), from Kᵀ = S⁻¹ H P.
+    // K = P Hᵀ S⁻¹, from Kᵀ = S⁻¹ H P.
     let k: SMatrix<f64, N, M> = chol.solve(&pht.transpose()).transpose();
     let dx = k * nu;
     let next = *p - k * pht.transpose();
