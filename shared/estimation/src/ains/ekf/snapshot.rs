@@ -84,9 +84,8 @@ pub struct Pending {
     pub position: Option<[f64; 5]>,
     /// GPS velocity NED, m/s, and its σ.
     pub velocity: Option<[f64; 4]>,
-    /// Attitude `[w, x, y, z]` and its σ about N, E, D (attitude estimate),
-    /// or roll, pitch, true heading and σ (AHRS, `w` = NaN is never used:
-    /// see `from_ahrs`).
+    /// The attitude estimate's `[w, x, y, z, σ_N, σ_E, σ_D]`, or the AHRS's
+    /// `[roll, pitch, true heading, 0, 0, 0, 0]` (rad) when `from_ahrs`.
     pub attitude: Option<[f64; 7]>,
     /// The attitude came from the AHRS.
     pub from_ahrs: bool,
