@@ -4,7 +4,8 @@
 //!
 //! `cargo run --release -p nauta-estimation --example ains_ekf_survey -- [FIRST [COUNT [HEADING]]]`
 //! (default: seeds 100-109, HEADING `mekf`; also `pf`, `ahrs`). Exits
-//! with 1 when a seed misses a target.
+//! with 1 when a seed misses the drift or velocity target or the 95 %
+//! region's coverage over the seeds is outside 90-98 %.
 
 #[path = "../tests/ains_ekf/harness.rs"]
 #[allow(dead_code)]
@@ -68,7 +69,7 @@ fn main() {
         println!(
             "seed {seed} {heading}: yaw mean N/S/other source {:.3?} ekf {:.3?} | end drift N/E/D {:.2}/{:.2}/{:.2} m/km | slope {:.2}/{:.2}/{:.2} m/km | \
              vel RMS {:.4}/{:.4}/{:.4} m/s | inside 95 % {:.1} % | yaw RMS {:.3}° σ {:.3}° | \
-             {:.2} µs/IMU | all targets {}",
+             {:.2} µs/IMU | drift and velocity targets {}",
             f.legs.map(|l| (l[0] / l[1].max(1.0)).to_degrees()),
             f.legs.map(|l| (l[2] / l[3].max(1.0)).to_degrees()),
             d[0],
@@ -92,11 +93,14 @@ fn main() {
         .map(|(_, f)| f.inside_95 * f.submerged as f64)
         .sum::<f64>()
         / results.iter().map(|(_, f)| f.submerged as f64).sum::<f64>();
+    let covered = (0.90..=0.98).contains(&pooled);
     println!(
-        "{pass} of {} seeds meet every target; truth inside the 95 % region {:.1} % of the \
-         submerged time over all seeds",
+        "{pass} of {} seeds meet the drift and velocity targets; truth inside the 95 % region \
+         {:.1} % of the submerged time over all seeds (target 90-98 %: {}; a single run of one \
+         dive is mostly all in or all out, so the target is taken over the seeds)",
         results.len(),
-        100.0 * pooled
+        100.0 * pooled,
+        if covered { "met" } else { "NOT met" }
     );
     let (us, n) = time_ekf(first, &params);
     println!(
@@ -104,7 +108,7 @@ fn main() {
          IMU sample, {:.0}× real time at 100 Hz",
         1e4 / us
     );
-    if pass < results.len() {
+    if pass < results.len() || !covered {
         std::process::exit(1);
     }
 }

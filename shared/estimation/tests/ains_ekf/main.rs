@@ -37,10 +37,10 @@ fn no_fix() -> EkfParams {
 
 /// The targets on one run, but for the upper bound of the 95 %
 /// region's coverage (≤ 98 %), which seed 7 does not meet: its truth is
-/// inside 100 % of the time (the published σ is conservative there; over
-/// seeds 100-109 the coverage is bimodal, see the crate's example
-/// `ains_ekf_survey`, which checks every target, that bound included, and
-/// exits 1 when one is missed).
+/// inside 100 % of the time (a run is one dive, and its error is mostly all
+/// inside or all outside the region; over seeds 100-109 the coverage is
+/// checked by the crate's example `ains_ekf_survey`, which exits 1 when a
+/// target is missed).
 fn check_targets(name: &str, f: &Figures) {
     let d = f.dive_drift_m_per_km();
     assert!(!f.dives.is_empty(), "{name}: no dive");

@@ -415,11 +415,13 @@ impl Ekf {
             HeadingBias {
                 std_rad: c.attitude_heading_bias_std,
                 time_s: c.attitude_heading_bias_time_s,
+                deviation_std_rad: c.heading_deviation_std,
             }
         } else {
             HeadingBias {
                 std_rad: c.heading_bias_std,
                 time_s: c.heading_bias_time_s,
+                deviation_std_rad: c.heading_deviation_std,
             }
         }
     }

@@ -27,7 +27,10 @@
 //! the published position σ would not cover the cross-track error. The
 //! 17th and 18th are the classical one-cycle compass deviation (the error
 //! of a residual hard iron, a function of the heading, Groves §6.1 on
-//! magnetic heading; random constants): on parallel transects flown in alternate directions a
+//! magnetic heading), Gauss-Markov with the bias's correlation time: an
+//! attitude filter's course-dependent error is not a fixed function of the
+//! heading, and as random constants the filter would learn them from the
+//! turns once and for all): on parallel transects flown in alternate directions a
 //! constant heading error cancels from leg to leg but a deviation does not,
 //! and without these states the position σ would not grow with it.
 //!
@@ -41,7 +44,7 @@
 //! δṗ  = δv                                   (NED metres, as Farrell)
 //! δḃ_a = w_ba,   δḃ_g = w_bg                 (random walks)
 //! ḃ_ψ = −b_ψ / τ_ψ + w_ψ,   E[w_ψ²] = 2σ_ψ²/τ_ψ   (Gauss-Markov)
-//! ȧ_ψ = ċ_ψ = 0                              (random constants)
+//! ȧ_ψ = −a_ψ / τ_ψ + w_a,  ċ_ψ = −c_ψ / τ_ψ + w_c   (Gauss-Markov, σ_d)
 //! ```
 //!
 //! Left out (below a centimetre over a survey with DVL aiding): the
@@ -127,8 +130,10 @@ impl Block {
 pub struct HeadingBias {
     /// Stationary σ, rad.
     pub std_rad: f64,
-    /// Correlation time, s.
+    /// Correlation time, s (of the deviation coefficients too).
     pub time_s: f64,
+    /// Stationary σ of each deviation coefficient, rad.
+    pub deviation_std_rad: f64,
 }
 
 /// The continuous-time noise spectral densities, diagonal of `Q_c`.
@@ -141,6 +146,8 @@ fn q_c(cfg: &EkfConfig, bh: HeadingBias) -> SVector<f64, N> {
         q[BG + i] = cfg.gyro_bias_walk * cfg.gyro_bias_walk;
     }
     q[BH] = 2.0 * bh.std_rad * bh.std_rad / bh.time_s;
+    q[DA] = 2.0 * bh.deviation_std_rad * bh.deviation_std_rad / bh.time_s;
+    q[DC] = q[DA];
     q
 }
 
@@ -165,6 +172,8 @@ fn f_t(b: &Block, gamma_over_r: f64, w_ie: &Vector3<f64>, tau_h: f64) -> Cov {
         f[(POS + i, VEL + i)] = t;
     }
     f[(BH, BH)] = -t / tau_h;
+    f[(DA, DA)] = -t / tau_h;
+    f[(DC, DC)] = -t / tau_h;
     f
 }
 
