@@ -9,6 +9,7 @@
 //! - [`tare`]: the depth gauge's offset, tared at the surface (every variant).
 
 pub mod dr;
+pub mod pf;
 pub mod role;
 pub mod tare;
 
