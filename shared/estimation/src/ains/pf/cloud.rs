@@ -17,9 +17,9 @@ use super::resampling::{self, Scratch};
 pub struct Component {
     /// The particles' values `x_j`.
     pub(super) x: Vec<f64>,
-    /// A companion value per particle moved with it by the resampling (the
-    /// position filter's velocity error `b_j`, [`super`] docs); empty for the
-    /// velocity filter.
+    /// A companion value per particle moved with it by the resampling: the
+    /// velocity filter's acceleration error, the position filter's velocity
+    /// error `b_j` ([`super`] docs).
     pub(super) b: Vec<f64>,
     /// The normalised weights `w_j` (eq. 10).
     pub(super) w: Vec<f64>,
@@ -73,19 +73,11 @@ impl Component {
         self.w.fill(w);
     }
 
-    /// The prediction of one component: `x_j += δ + σ z_j` (eqs. 19 and 21,
-    /// with the process noise that keeps the cloud spread; `z` scratch).
-    pub fn shift(&mut self, delta: f64, sigma: f64, noise: &mut Noise, z: &mut [f64]) {
-        let z = &mut z[..self.x.len()];
-        noise.fill_normal(z, sigma);
-        for (x, z) in self.x.iter_mut().zip(z.iter()) {
-            *x += delta + *z;
-        }
-    }
-
-    /// The position prediction with the companion velocity error (first
-    /// order Gauss–Markov, `φ = e^{−Δt/τ}`):
-    /// `x_j += (δ/Δt + b_j) Δt + σ z_j`, then `b_j ← φ b_j + σ_b √(1−φ²) z'_j`.
+    /// The prediction of one component (eqs. 19 and 21) with the process
+    /// noise that keeps the cloud spread and the companion error `b_j`
+    /// (first-order Gauss–Markov, `φ = e^{−Δt/τ}`, [`super`] docs):
+    /// `x_j += δ + b_j Δt + σ z_j`, then `b_j ← φ b_j + σ_b √(1−φ²) z'_j`
+    /// (`b_drive` is `σ_b √(1−φ²)`; `z` scratch).
     #[allow(clippy::too_many_arguments)]
     pub fn shift_with_bias(
         &mut self,
@@ -106,13 +98,6 @@ impl Component {
         noise.fill_normal(z, b_drive);
         for (b, z) in self.b.iter_mut().zip(z.iter()) {
             *b = phi * *b + *z;
-        }
-    }
-
-    /// Adds `delta` to every particle (a change of origin).
-    pub fn offset(&mut self, delta: f64) {
-        for x in &mut self.x {
-            *x += delta;
         }
     }
 

@@ -27,6 +27,14 @@ pub struct AinsPfParams {
     /// and what the attitude's error makes of gravity (0.05° of tilt is
     /// 0.009 m/s²). Default 0.02.
     pub velocity_noise_m_s_per_sqrt_s: f64,
+    /// Stationary σ of the acceleration error each velocity particle
+    /// carries (first-order Gauss–Markov, [`super`] docs), m/s²: the
+    /// accelerometer's bias resolved in NED (the simulator's MTi-30 class
+    /// has a turn-on bias of 0.03 m/s² 1σ per axis). 0 leaves it out.
+    /// Default 0.05.
+    pub accel_bias_std_m_s2: f64,
+    /// Its correlation time, s. Default 600.
+    pub accel_bias_time_s: f64,
     /// Process noise of eq. 21, a position random walk per component,
     /// m/√s. Default 0.01.
     pub position_noise_m_per_sqrt_s: f64,
@@ -71,7 +79,8 @@ pub struct AinsPfParams {
     pub depth_gate_chi2: f64,
     /// After this many consecutive gated measurements of one kind the next
     /// one re-anchors the filter: its particles are drawn around the
-    /// measurement (the gate cannot lock a sensor out). Default 10.
+    /// measurement (the gate cannot lock a sensor out). Default 5 (1 s of
+    /// DVL at 5 Hz, 5 s of GPS at 1 Hz).
     pub gate_max_rejections: u32,
     /// An aiding stream counts in `aiding_mode` while its last used sample
     /// is at most this old, s; the attitude input is preferred to the AHRS
@@ -84,7 +93,8 @@ pub struct AinsPfParams {
     /// Default 1.5.
     pub surface_window_s: f64,
     /// ... and the estimated vertical velocity is below this, m/s.
-    /// Default 0.1.
+    /// Default 0.05 (as `dr`: the moving average then holds almost no
+    /// reading of the dive's first decimetres, which GPS still sees).
     pub tare_max_vertical_speed_m_s: f64,
     /// Surface readings the tare averages ([`crate::ains::tare`]).
     /// Default 20.
@@ -98,8 +108,10 @@ impl Default for AinsPfParams {
             position_particles: 128,
             seed: 0,
             velocity_noise_m_s_per_sqrt_s: 0.02,
+            accel_bias_std_m_s2: 0.05,
+            accel_bias_time_s: 600.0,
             position_noise_m_per_sqrt_s: 0.01,
-            drift_speed_std_m_s: 0.004,
+            drift_speed_std_m_s: 0.003,
             drift_time_s: 600.0,
             dvl_std_m_s: 0.015,
             min_position_std_m: 0.5,
@@ -112,11 +124,11 @@ impl Default for AinsPfParams {
             velocity_gate_chi2: 16.3,
             position_gate_chi2: 13.8,
             depth_gate_chi2: 10.8,
-            gate_max_rejections: 10,
+            gate_max_rejections: 5,
             aiding_timeout_s: 1.0,
             max_speed_m_s: 10.0,
             surface_window_s: 1.5,
-            tare_max_vertical_speed_m_s: 0.1,
+            tare_max_vertical_speed_m_s: 0.05,
             tare_samples: 20,
         }
     }
@@ -154,6 +166,8 @@ pub struct AinsPfConfig {
     pub(super) n_p: usize,
     pub(super) seed: u64,
     pub(super) q_v: f64,
+    pub(super) accel_bias_std: f64,
+    pub(super) accel_bias_time_s: f64,
     pub(super) q_p: f64,
     pub(super) drift_std: f64,
     pub(super) drift_time_s: f64,
@@ -226,6 +240,15 @@ impl AinsPfParams {
                 "velocity_noise_m_s_per_sqrt_s",
                 self.velocity_noise_m_s_per_sqrt_s,
             )?,
+            accel_bias_std: in_range(
+                "accel_bias_std_m_s2",
+                self.accel_bias_std_m_s2,
+                0.0,
+                10.0,
+                false,
+                "[0, 10]",
+            )?,
+            accel_bias_time_s: positive("accel_bias_time_s", self.accel_bias_time_s)?,
             q_p: in_range(
                 "position_noise_m_per_sqrt_s",
                 self.position_noise_m_per_sqrt_s,

@@ -65,6 +65,8 @@ pub struct AinsPfSnapshot {
     pub origin_rad: [f64; 2],
     /// Velocity filter, NED, m/s.
     pub velocity: ComponentMoments,
+    /// The velocity particles' acceleration errors, m/s².
+    pub accel_bias: ComponentMoments,
     /// Position filter: north and east of the origin and depth, m.
     pub position: ComponentMoments,
     /// The position particles' velocity errors, m/s.
@@ -112,6 +114,7 @@ impl AinsPfSnapshot {
         }
         for (name, m) in [
             ("velocity", &self.velocity),
+            ("accel_bias", &self.accel_bias),
             ("position", &self.position),
             ("drift", &self.drift),
         ] {
