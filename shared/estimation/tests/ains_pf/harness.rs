@@ -83,6 +83,8 @@ pub struct AttitudeScore {
     pub n: u64,
     pub sum: [f64; 3],
     pub sq: [f64; 3],
+    /// Sum of the published σ about N, E, D, rad.
+    pub std: [f64; 3],
 }
 
 impl AttitudeScore {
@@ -90,18 +92,22 @@ impl AttitudeScore {
         let t = Rotation::<Frd, Ned>::from_wxyz(truth.quat_nb).expect("unit truth");
         let e = AttitudeError::between(est.attitude.as_nalgebra(), t.as_nalgebra());
         self.n += 1;
+        for (s, v) in self.std.iter_mut().zip(est.std_rad.to_array()) {
+            *s += v;
+        }
         for (i, v) in [e.roll_rad, e.pitch_rad, e.yaw_rad].into_iter().enumerate() {
             self.sum[i] += v;
             self.sq[i] += v * v;
         }
     }
 
-    /// Mean and RMS per axis, degrees.
-    pub fn deg(&self) -> ([f64; 3], [f64; 3]) {
+    /// Mean, RMS and mean published σ per axis, degrees.
+    pub fn deg(&self) -> ([f64; 3], [f64; 3], [f64; 3]) {
         let n = self.n.max(1) as f64;
         (
             self.sum.map(|s| (s / n).to_degrees()),
             self.sq.map(|s| (s / n).sqrt().to_degrees()),
+            self.std.map(|s| (s / n).to_degrees()),
         )
     }
 }

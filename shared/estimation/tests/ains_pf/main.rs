@@ -68,8 +68,10 @@ fn report(name: &str, s: &Score) {
             sl[2]
         );
     }
-    let (m, r) = s.attitude.deg();
-    eprintln!("  attitude input error roll/pitch/yaw: mean {m:.3?} RMS {r:.3?} deg");
+    let (m, r, sd) = s.attitude.deg();
+    eprintln!(
+        "  attitude input error roll/pitch/yaw: mean {m:.3?} RMS {r:.3?} deg; its σ about N/E/D {sd:.3?} deg"
+    );
     eprintln!("  {:?}", s.stats);
 }
 

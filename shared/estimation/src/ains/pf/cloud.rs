@@ -103,38 +103,12 @@ impl Component {
 
     /// Weighted mean and variance.
     pub fn moments(&self) -> Moments {
-        let mean: f64 = self.x.iter().zip(&self.w).map(|(x, w)| w * x).sum();
-        let var: f64 = self
-            .x
-            .iter()
-            .zip(&self.w)
-            .map(|(x, w)| w * (x - mean) * (x - mean))
-            .sum();
-        Moments {
-            mean,
-            var: var.max(0.0),
-        }
+        moments(&self.x, &self.w)
     }
 
     /// Weighted mean and variance of the companions.
     pub fn b_moments(&self) -> Moments {
-        if self.b.is_empty() {
-            return Moments {
-                mean: 0.0,
-                var: 0.0,
-            };
-        }
-        let mean: f64 = self.b.iter().zip(&self.w).map(|(x, w)| w * x).sum();
-        let var: f64 = self
-            .b
-            .iter()
-            .zip(&self.w)
-            .map(|(x, w)| w * (x - mean) * (x - mean))
-            .sum();
-        Moments {
-            mean,
-            var: var.max(0.0),
-        }
+        moments(&self.b, &self.w)
     }
 
     /// Paper 000 eqs. 23 and 25 (and 9-10): `w_j ← w_j · exp(−(z − x_j)² /
@@ -194,6 +168,28 @@ impl Component {
         }
         resampling::resample(self, kernel, noise, scratch);
         true
+    }
+}
+
+/// Weighted mean and variance in one pass, about the first value (so that
+/// positions a kilometre from the origin keep their centimetres):
+/// `d_j = x_j − x_0`, `x̄ = x_0 + Σ w d`, `s² = Σ w d² − (Σ w d)²`.
+fn moments(x: &[f64], w: &[f64]) -> Moments {
+    let Some(&x0) = x.first() else {
+        return Moments {
+            mean: 0.0,
+            var: 0.0,
+        };
+    };
+    let (mut m1, mut m2) = (0.0, 0.0);
+    for (x, w) in x.iter().zip(w) {
+        let d = x - x0;
+        m1 += w * d;
+        m2 += w * d * d;
+    }
+    Moments {
+        mean: x0 + m1,
+        var: (m2 - m1 * m1).max(0.0),
     }
 }
 
