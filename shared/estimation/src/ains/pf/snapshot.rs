@@ -2,12 +2,15 @@
 //! data ([`AinsPfSnapshot`]) for warm restart and hot swap.
 //!
 //! The particles do not fit the `AinsSnapshot` message (2304 bytes; 128
-//! particles × 9 numbers are 9 kB), so a snapshot holds each filter's
-//! moments per component (the components are separate filters, eqs. 13-16,
-//! so their means and variances are what the cloud says of its
-//! distribution to second order) and the random generator's state;
-//! `restore` draws the clouds again from them. A warm restart continues
-//! statistically, not bit for bit.
+//! particles of 18 numbers, value, companion and weight of six components,
+//! are 18 kB), so a snapshot holds each component's mean and standard
+//! deviation, and its companion's (the components are separate filters,
+//! eqs. 13-16, so these are what the cloud says of its distribution to
+//! second order), and the random generator's state; `restore` draws the
+//! clouds again from them, Gaussian. A warm restart continues
+//! statistically, not bit for bit. Encoded as nauta records it (bincode 2
+//! serde, fixed-width integers) a snapshot takes 994 bytes (`cargo test
+//! --release -p nauta-estimation --test ains_pf restored -- --nocapture`).
 
 use serde::{Deserialize, Serialize};
 
