@@ -9,7 +9,8 @@
 //! in-process (`NAUTA_PF_ATTITUDE=pf` for paper 000's attitude PF; see
 //! [`harness::attitude_core`] for why the default is the MEKF).
 //!
-//! `NAUTA_PF_SEEDS=100,101,...` runs the survey test on other seeds.
+//! `NAUTA_PF_SEEDS=100,101,...` runs the survey test on other seeds,
+//! `NAUTA_PF_PARTICLES=N` with another particle count.
 
 mod encoded_size;
 mod harness;
@@ -36,6 +37,20 @@ fn no_position_aiding(seed: u64) -> AinsPfParams {
         seed,
         ..Default::default()
     }
+}
+
+/// The survey test's parameters: [`no_position_aiding`], with
+/// `NAUTA_PF_PARTICLES=N` particles in both filters (default 128).
+fn survey_params(seed: u64) -> AinsPfParams {
+    let mut p = no_position_aiding(seed);
+    if let Some(n) = std::env::var("NAUTA_PF_PARTICLES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        p.velocity_particles = n;
+        p.position_particles = n;
+    }
+    p
 }
 
 fn report(name: &str, s: &Score) {
@@ -95,7 +110,7 @@ fn seeds() -> Vec<u64> {
 #[test]
 fn survey_meets_the_issue_targets() {
     for seed in seeds() {
-        let s = &run_survey(seed, 1e6, &[no_position_aiding(seed)])[0];
+        let s = &run_survey(seed, 1e6, &[survey_params(seed)])[0];
         report(&format!("survey seed {seed}"), s);
         assert_eq!(s.dives.len(), 1, "seed {seed}: the survey has one dive");
         let d = &s.dives[0];
