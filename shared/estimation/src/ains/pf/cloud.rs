@@ -154,7 +154,7 @@ impl Component {
     }
 
     /// Eq. 11's test and the selection-and-replacement resampling of this
-    /// component ([`resampling`]) when `N_eff < threshold · N`; true if it
+    /// component (`resampling.rs`) when `N_eff < threshold · N`; true if it
     /// resampled.
     pub fn maybe_resample(
         &mut self,

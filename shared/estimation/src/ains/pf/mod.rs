@@ -50,12 +50,12 @@
 //!
 //! **Resampling** (eq. 11), per component: when the effective particle
 //! number falls below `resample_threshold · N`, selection with replacement
-//! and a shrinkage kernel ([`resampling`]). **Estimate**: weighted means
+//! and a shrinkage kernel (`resampling.rs`). **Estimate**: weighted means
 //! (eqs. 26-27); the published σ are the weighted standard deviations, and
 //! `predicted_drift_m` the horizontal RMS `√(s²_N + s²_E)` of the position
 //! particles.
 //!
-//! **Gate** ([`gate`]): every measurement passes a normalised-innovation
+//! **Gate** (`gate.rs`): every measurement passes a normalised-innovation
 //! gate against the particles' spread; after `gate_max_rejections` gated
 //! ones in a row the next one re-anchors its filter around itself
 //! (counted in [`AinsPfStats`]).
@@ -95,11 +95,12 @@
 //! DVL velocity above `max_speed_m_s`, a depth outside [−10, 11000] m, a
 //! GPS fix of quality 0, a latitude beyond ±90°, a negative or non-finite σ.
 
+mod check;
 mod cloud;
-pub mod gate;
+mod gate;
 mod noise;
 mod params;
-pub mod resampling;
+mod resampling;
 mod snapshot;
 
 pub use cloud::Moments;
@@ -116,6 +117,7 @@ use crate::local::flat;
 use crate::readings::{Ahrs, Depth, Dvl, Fix, Gps, Imu, Nav};
 use crate::role::{Estimator, EstimatorError, Stamped};
 use crate::strapdown::{StrapdownState, propagate};
+use check::check_input;
 use cloud::Component;
 use gate::{Decision, decide, normalised_innovation};
 use noise::Noise;
@@ -249,105 +251,6 @@ impl ParticleAins {
 
     fn fresh(&self, last: Option<u64>, t: u64) -> bool {
         last.is_some_and(|l| t.saturating_sub(l) <= self.config.aiding_timeout_ns)
-    }
-
-    fn validate(&self, input: &AinsInput) -> Result<(), EstimatorError> {
-        let bad_lat =
-            |lat: f64, lon: f64| !(lat.abs() <= std::f64::consts::FRAC_PI_2 && lon.is_finite());
-        match input {
-            AinsInput::Imu(m) => {
-                if !(m.interval_s > 0.0 && m.interval_s <= 1.0) {
-                    return Err(err(
-                        "imu-interval",
-                        format!("IMU interval {} s is not in (0, 1]", m.interval_s),
-                    ));
-                }
-                if !(m.accel_m_s2.norm() <= 200.0 && m.gyro_rad_s.norm().is_finite()) {
-                    return Err(err(
-                        "imu-out-of-range",
-                        format!(
-                            "specific force {} m/s², rate {} rad/s",
-                            m.accel_m_s2.norm(),
-                            m.gyro_rad_s.norm()
-                        ),
-                    ));
-                }
-            }
-            AinsInput::Dvl(d) => {
-                let speed = d.velocity_body_m_s.norm();
-                if d.bottom_lock && !(speed <= self.config.max_speed) {
-                    return Err(err(
-                        "dvl-out-of-range",
-                        format!(
-                            "DVL speed {speed} m/s above max_speed_m_s = {}",
-                            self.config.max_speed
-                        ),
-                    ));
-                }
-            }
-            AinsInput::Depth(d) => {
-                if !(-10.0..=11_000.0).contains(&d.depth_m) {
-                    return Err(err(
-                        "depth-out-of-range",
-                        format!("depth {} m is not in [-10, 11000]", d.depth_m),
-                    ));
-                }
-            }
-            AinsInput::Gps(g) => {
-                if g.quality == 0 {
-                    return Err(err("gps-no-fix", "GPS fix of quality 0 (no fix)"));
-                }
-                if bad_lat(g.lat_rad, g.lon_rad) {
-                    return Err(err(
-                        "gps-out-of-range",
-                        format!("GPS latitude {} rad is not a latitude", g.lat_rad),
-                    ));
-                }
-                if !(g.horizontal_std_m >= 0.0 && g.horizontal_std_m.is_finite()) {
-                    return Err(err(
-                        "gps-bad-std",
-                        format!("GPS horizontal σ {} m", g.horizontal_std_m),
-                    ));
-                }
-                if let Some((v, s)) = &g.velocity
-                    && !(v.norm() <= self.config.max_speed && *s >= 0.0 && s.is_finite())
-                {
-                    return Err(err(
-                        "gps-bad-velocity",
-                        format!("GPS velocity {v:?} m/s, σ {s} m/s"),
-                    ));
-                }
-            }
-            AinsInput::Fix(f) => {
-                if bad_lat(f.lat_rad, f.lon_rad) {
-                    return Err(err(
-                        "fix-out-of-range",
-                        format!("fix latitude {} rad is not a latitude", f.lat_rad),
-                    ));
-                }
-                if !(f.std_north_m >= 0.0
-                    && f.std_north_m.is_finite()
-                    && f.std_east_m >= 0.0
-                    && f.std_east_m.is_finite())
-                {
-                    return Err(err(
-                        "fix-bad-std",
-                        format!("fix σ {} / {} m", f.std_north_m, f.std_east_m),
-                    ));
-                }
-            }
-            AinsInput::Ahrs(a) => {
-                if ![a.roll_rad, a.pitch_rad, a.heading_mag_rad]
-                    .iter()
-                    .all(|v| v.is_finite())
-                    || a.pitch_rad.abs() > std::f64::consts::FRAC_PI_2
-                {
-                    return Err(err("ahrs-out-of-range", format!("{a:?}")));
-                }
-            }
-            AinsInput::Attitude(_) => {}
-        }
-        Ok(())
     }
 
     /// Eqs. 17-21 for one IMU sample, then the output.
@@ -668,7 +571,7 @@ impl Estimator for ParticleAins {
                 format!("input stamped {t} ns after one stamped {last} ns"),
             ));
         }
-        self.validate(input)?;
+        check_input(&self.config, input)?;
         match input {
             AinsInput::Imu(m) => self.on_imu(m, t, out)?,
             AinsInput::Attitude(a) => self.on_attitude(a.attitude, true, t),
