@@ -248,19 +248,35 @@ fn a_restored_filter_continues_statistically() {
     );
 }
 
-/// A 30 s DVL outage in the middle of a transect: velocity from the IMU
-/// alone, the `DVL` bit off after the timeout, the published σ growing,
-/// the truth inside 3σ, and all back once the DVL returns.
+/// A 30 s loss of bottom lock in the middle of a transect (the DVL goes on
+/// publishing, without lock): velocity from the IMU alone, the `DVL` bit
+/// off after the timeout, the published σ growing, the truth inside 3σ,
+/// and all back once the lock returns.
 #[test]
 fn a_dvl_outage_is_bridged_by_the_imu_and_widens_the_spread() {
     let (site, inputs) = recorded(7, 400.0);
     let (t0, t1) = (300_000_000_000u64, 330_000_000_000u64);
+    let mut lost = 0;
     let inputs: Vec<_> = inputs
         .into_iter()
-        .filter(|(i, _)| !(matches!(i, AinsInput::Dvl(_)) && (t0..t1).contains(&i.stamp_ns())))
+        .map(|(i, t)| match i {
+            AinsInput::Dvl(d) if (t0..t1).contains(&d.stamp_ns) => {
+                lost += 1;
+                let no_lock = Dvl {
+                    bottom_lock: false,
+                    beams_valid: 0,
+                    velocity_body_m_s: Vector::zeros(),
+                    ..d
+                };
+                (AinsInput::Dvl(no_lock), t)
+            }
+            _ => (i, t),
+        })
         .collect();
+    assert_eq!(lost, 150, "30 s at 5 Hz");
     let mut e = ParticleAins::new(&no_position_aiding(7), site).expect("valid");
     let out = feed(&mut e, &inputs);
+    assert!(e.stats().dvl_no_lock >= lost, "{:?}", e.stats());
     let at = |s: f64| {
         out.iter()
             .find(|(n, _)| n.stamp_ns as f64 >= s * 1e9)
