@@ -55,12 +55,12 @@ pub fn site(g: &Generator) -> Site {
 
 /// The attitude role's estimator at the site (400 alignment samples, as the
 /// shipped manifests): the `mekf` variant, or paper 000's attitude PF with
-/// `NAUTA_PF_ATTITUDE=pf`. The MEKF is the default because the attitude
-/// PF's errors in the survey's turns (0.2° RMS over the survey, seed 7,
-/// several tenths of a degree while turning) put the velocity filter's RMS
-/// at 0.02 m/s, twice the target, the DVL's spikes aside; measured with
-/// `NAUTA_PF_ATTITUDE=pf cargo test --release -p nauta-estimation --test
-/// ains_pf survey -- --nocapture`.
+/// `NAUTA_PF_ATTITUDE=pf`. The MEKF is the default because with the
+/// attitude PF's errors in the survey's turns (0.2° RMS over the survey,
+/// seed 7) the velocity RMS misses the target with the default parameters
+/// (0.0217 / 0.0201 / 0.0068 m/s; 0.0106 / 0.0085 / 0.0078 with
+/// `accel_bias_time_s = 10`, and the depth then leaves its 3σ in the warm
+/// restart test); see `AinsPfParams::accel_bias_time_s`.
 pub fn attitude_core(g: &Generator) -> AttitudeCore {
     let s = site(g);
     let p = if std::env::var("NAUTA_PF_ATTITUDE").as_deref() == Ok("pf") {

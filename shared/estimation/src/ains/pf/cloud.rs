@@ -148,6 +148,38 @@ impl Component {
         Ok(())
     }
 
+    /// A measurement much narrower than the cloud (`s > 5σ`): eq. 23's
+    /// weights would fall on a few particles, whose spread says nothing of
+    /// the posterior's. The particles are selected with those weights (the
+    /// companions that go with values near the measurement survive, as in
+    /// an ordinary update), then their values drawn from the Gaussian
+    /// posterior of the cloud's moments and the measurement,
+    /// `x̄⁺ = x̄ + s²/(s² + σ²) (z − x̄)`, `s⁺² = s² σ² / (s² + σ²)` (our
+    /// addition; it happens when the DVL returns after an outage). False
+    /// (nothing done) when the cloud is not that wide.
+    pub fn narrow_update(
+        &mut self,
+        z: f64,
+        sigma: f64,
+        noise: &mut Noise,
+        scratch: &mut Scratch,
+    ) -> Result<bool, Degenerate> {
+        let m = self.moments();
+        let r = sigma * sigma;
+        if m.var <= 25.0 * r {
+            return Ok(false);
+        }
+        self.weigh(z, sigma, &mut scratch.z)?;
+        resampling::resample(self, 0.0, noise, scratch);
+        let k = m.var / (m.var + r);
+        let mean = m.mean + k * (z - m.mean);
+        noise.fill_normal(&mut self.x, (k * r).sqrt());
+        for x in &mut self.x {
+            *x += mean;
+        }
+        Ok(true)
+    }
+
     /// Paper 000 eq. 11: the effective particle number `1 / Σ w_j²`.
     pub fn effective(&self) -> f64 {
         1.0 / self.w.iter().map(|w| w * w).sum::<f64>()

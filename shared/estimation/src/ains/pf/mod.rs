@@ -78,16 +78,17 @@
 //! the surface, no position aiding, seed 7, the attitude input from the
 //! attitude role's `mekf` variant run in-process; `cargo test --release -p
 //! nauta-estimation --test ains_pf survey -- --nocapture`): drift while
-//! submerged 0.26 / 0.78 / 0.00 m/km N/E/D (final error over distance;
-//! least-squares slopes 0.16 / 0.99 / 0.00 m/km; paper 000's DVL-aided INS:
-//! 23.8 / 29 / 32.8 m/km), velocity RMS 0.0080 / 0.0072 / 0.0062 m/s
+//! submerged 0.48 / 0.83 / 0.00 m/km N/E/D (final error over distance;
+//! least-squares slopes 0.14 / 0.95 / 0.00 m/km; paper 000's DVL-aided INS:
+//! 23.8 / 29 / 32.8 m/km), velocity RMS 0.0080 / 0.0070 / 0.0061 m/s
 //! (paper: 0.014 / 0.016 / 0.016), truth inside the published 95 %
-//! horizontal region 96.3 % of the time, about 6 µs per IMU sample with 128
-//! particles per filter on a shared, loaded two-core machine. With paper
-//! 000's attitude PF as the attitude input (`NAUTA_PF_ATTITUDE=pf`) the
-//! velocity RMS is 0.023 / 0.020 / 0.007 m/s: its attitude errors in the
-//! turns (0.2° RMS) move the specific force faster than the acceleration
-//! error each particle carries can follow.
+//! horizontal region 96.8 % of the time, about 5.4 µs per IMU sample with
+//! 128 particles per filter on a shared, loaded two-core machine. With
+//! paper 000's attitude PF as the attitude input (`NAUTA_PF_ATTITUDE=pf`)
+//! the velocity RMS is 0.022 / 0.020 / 0.007 m/s (0.011 / 0.009 / 0.008
+//! with `accel_bias_time_s = 10`): its attitude errors in the turns (0.2°
+//! RMS) move the specific force faster than the acceleration error each
+//! particle carries follows.
 //!
 //! **Bad input** ([`EstimatorError`], state kept): a stamp before the last
 //! one, an IMU sample the strapdown refuses (interval outside (0, 1] s,
@@ -382,6 +383,18 @@ impl ParticleAins {
             Decision::Use => {
                 for ((&i, &z), &s) in axes.iter().zip(z).zip(sigma) {
                     let comp = &mut f.c[i];
+                    match comp.narrow_update(z, s, &mut self.noise, &mut f.scratch) {
+                        Ok(true) => {
+                            *resamples += 1;
+                            continue;
+                        }
+                        Ok(false) => {}
+                        Err(_) => {
+                            let b = comp.b_moments();
+                            comp.spread(z, s, b, &mut self.noise);
+                            continue;
+                        }
+                    }
                     if comp.weigh(z, s, &mut f.scratch.z).is_err() {
                         // No particle left near it (the gate's limit was
                         // far beyond the cloud): re-anchored on it.
