@@ -254,4 +254,24 @@ mod tests {
         assert!((c.w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         assert!(c.weigh(f64::NAN, 1.0, &mut s).is_err());
     }
+
+    /// A measurement 100 times narrower than the cloud: the Gaussian
+    /// posterior, not the few particles that happened to be near it.
+    #[test]
+    fn a_narrow_measurement_gives_the_gaussian_posterior() {
+        let mut noise = Noise::new(2);
+        let mut c = Component::new(256, true);
+        let b = Moments {
+            mean: 0.0,
+            var: 1.0,
+        };
+        c.spread(0.0, 1.0, b, &mut noise);
+        let mut s = Scratch::new(256);
+        assert_eq!(c.narrow_update(0.5, 0.01, &mut noise, &mut s), Ok(true));
+        let m = c.moments();
+        assert!((m.mean - 0.5).abs() < 0.003, "{m:?}");
+        assert!((m.var.sqrt() - 0.01).abs() < 0.002, "{m:?}");
+        // Not that narrow: left to eq. 23.
+        assert_eq!(c.narrow_update(0.5, 0.01, &mut noise, &mut s), Ok(false));
+    }
 }
