@@ -1,6 +1,7 @@
 //! `nauta-ains`: the aided INS role (DESIGN §2). Wiring only: the estimator is
-//! [`AinsCore`] (in `nauta-estimation`: the `dr` variant, paper 002's dead
-//! reckoning, so far), its lifecycle the runtime's estimator shell.
+//! [`AinsCore`] (in `nauta-estimation`: `pf`, paper 000 §III-A's particle
+//! filters; `dr`, paper 002's dead reckoning; `ekf`, an error-state Kalman
+//! filter), its lifecycle the runtime's estimator shell.
 //!
 //! Inputs (ties at one stamp are taken in this order): IMU, DVL, depth, GPS,
 //! AHRS from the sensor, then `attitude/estimate` and `positioning/fix`, both
@@ -52,8 +53,12 @@ fn main() -> ExitCode {
 /// The core of `variant` with its parameters from the manifest and the
 /// site's position and declination.
 fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result<AinsCore> {
-    // `dr` is the only variant so far (VARIANTS); the shell refuses others.
-    let params = AinsParams::Dr(manifest.params(process, Some(variant))?);
+    // The shell refuses a variant not in VARIANTS.
+    let params = match variant {
+        "dr" => AinsParams::Dr(manifest.params(process, Some(variant))?),
+        "ekf" => AinsParams::Ekf(manifest.params(process, Some(variant))?),
+        _ => AinsParams::Pf(manifest.params(process, Some(variant))?),
+    };
     let site = manifest.site.with_context(|| {
         format!(
             "{}: the manifest has no [site]: the aided INS needs the position and declination",

@@ -4,12 +4,16 @@
 //! modules and implement [`crate::Estimator`] with [`AinsInput`] in and
 //! [`crate::readings::Nav`] out (`ains/nav`).
 //!
+//! - [`pf`]: paper 000 §III-A's velocity and position particle filters.
 //! - [`dr`]: paper 002's dead reckoning with its spike filter and error
 //!   predictor.
+//! - [`ekf`]: an error-state Kalman filter of the INS errors and the heading
+//!   source's.
 //! - [`tare`]: the depth gauge's offset, tared at the surface (every variant).
 
 pub mod dr;
 pub mod ekf;
+pub mod pf;
 pub mod role;
 pub mod tare;
 

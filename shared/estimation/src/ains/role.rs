@@ -1,38 +1,53 @@
 //! The aided INS role's estimator as the shell runs it: one of its variants
 //! behind one [`Estimator`], and the state one instance hands another.
 //!
-//! Variants so far: `dr` (paper 002, [`DeadReckoning`]). Paper 000's `pf`
-//! and the error-state `ekf` join this enum as they are built.
+//! Variants: `pf` (paper 000 §III-A, [`ParticleAins`], the default), `dr`
+//! (paper 002, [`DeadReckoning`]) and `ekf` (an error-state Kalman filter,
+//! [`Ekf`]).
 
 use crate::ains::AinsInput;
 use crate::ains::dr::{DeadReckoning, DrParams, DrSnapshot, Site};
+use crate::ains::ekf::{Ekf, EkfParams, EkfSnapshot};
+use crate::ains::pf::{AinsPfParams, AinsPfSnapshot, ParticleAins};
 use crate::readings::Nav;
 use crate::role::{Estimator, EstimatorError};
 
 /// The variants of the aided INS role; the first is the default.
-pub const VARIANTS: [&str; 1] = ["dr"];
+pub const VARIANTS: [&str; 3] = ["pf", "dr", "ekf"];
 
 /// A variant's parameters, as the manifest gives them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum AinsParams {
+    /// `pf`: paper 000's velocity and position particle filters.
+    Pf(AinsPfParams),
     /// `dr`: paper 002's dead reckoning.
     Dr(DrParams),
+    /// `ekf`: the error-state Kalman filter.
+    Ekf(EkfParams),
 }
 
 /// One running variant.
 #[derive(Debug, Clone)]
 pub enum AinsCore {
+    /// `pf`.
+    Pf(Box<ParticleAins>),
     /// `dr`.
     Dr(Box<DeadReckoning>),
+    /// `ekf`.
+    Ekf(Box<Ekf>),
 }
 
-/// The state of an aided INS instance, for a warm restart or a hot swap:
-/// the exact state of its variant (another instance of the same variant
-/// continues bit for bit).
+/// The state of an aided INS instance, for a warm restart or a hot swap.
+/// `dr` and `ekf` continue bit for bit; `pf` from its filters' moments (its
+/// particles do not fit a snapshot: the cloud is redrawn).
 #[derive(Debug, Clone, PartialEq)]
 pub enum AinsState {
+    /// A `pf` instance's state.
+    Pf(Box<AinsPfSnapshot>),
     /// A `dr` instance's state.
     Dr(Box<DrSnapshot>),
+    /// An `ekf` instance's state.
+    Ekf(Box<EkfSnapshot>),
     /// A snapshot message that did not decode into any variant's state (its
     /// variant, and why); refused on restore.
     Unreadable {
@@ -47,7 +62,9 @@ impl AinsState {
     /// The variant this state belongs to.
     pub fn variant(&self) -> &str {
         match self {
+            AinsState::Pf(_) => "pf",
             AinsState::Dr(_) => "dr",
+            AinsState::Ekf(_) => "ekf",
             AinsState::Unreadable { variant, .. } => variant,
         }
     }
@@ -57,22 +74,27 @@ impl AinsCore {
     /// The variant of `params` at `site`.
     pub fn new(params: &AinsParams, site: Site) -> anyhow::Result<Self> {
         Ok(match params {
+            AinsParams::Pf(p) => AinsCore::Pf(Box::new(ParticleAins::new(p, site)?)),
             AinsParams::Dr(p) => AinsCore::Dr(Box::new(DeadReckoning::new(p, site)?)),
+            AinsParams::Ekf(p) => AinsCore::Ekf(Box::new(Ekf::new(p, site)?)),
         })
     }
 
     /// This instance's variant.
     pub fn variant(&self) -> &'static str {
         match self {
+            AinsCore::Pf(_) => "pf",
             AinsCore::Dr(_) => "dr",
+            AinsCore::Ekf(_) => "ekf",
         }
     }
 
     /// Whether the variant's error prediction says it is time to surface
-    /// (paper 002's embedded use).
+    /// (paper 002's embedded use; `dr` only so far).
     pub fn surfacing_advised(&self) -> bool {
         match self {
             AinsCore::Dr(d) => d.surfacing_advised(),
+            AinsCore::Pf(_) | AinsCore::Ekf(_) => false,
         }
     }
 }
@@ -84,13 +106,17 @@ impl Estimator for AinsCore {
 
     fn on_input(&mut self, input: &AinsInput, out: &mut Vec<Nav>) -> Result<(), EstimatorError> {
         match self {
+            AinsCore::Pf(p) => p.on_input(input, out),
             AinsCore::Dr(d) => d.on_input(input, out),
+            AinsCore::Ekf(e) => e.on_input(input, out),
         }
     }
 
     fn snapshot(&self) -> Option<AinsState> {
         match self {
+            AinsCore::Pf(p) => p.snapshot().map(|s| AinsState::Pf(Box::new(s))),
             AinsCore::Dr(d) => d.snapshot().map(|s| AinsState::Dr(Box::new(s))),
+            AinsCore::Ekf(e) => e.snapshot().map(|s| AinsState::Ekf(Box::new(s))),
         }
     }
 
@@ -111,11 +137,10 @@ impl Estimator for AinsCore {
                 ),
             )
         };
-        if own != state.variant() {
-            return Err(mismatch());
-        }
         match (&mut *self, state) {
+            (AinsCore::Pf(p), AinsState::Pf(s)) => p.restore(s, stamp_ns),
             (AinsCore::Dr(d), AinsState::Dr(s)) => d.restore(s, stamp_ns),
+            (AinsCore::Ekf(e), AinsState::Ekf(s)) => e.restore(s, stamp_ns),
             _ => Err(mismatch()),
         }
     }
