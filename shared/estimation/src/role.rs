@@ -17,9 +17,12 @@ pub trait Stamped {
     fn stamp_ns(&self) -> u64;
 }
 
-/// Why an estimator could not use an input or a snapshot; its state is kept
-/// (the shell counts the input as rejected, logs the first of each kind and
-/// goes on).
+/// Why an estimator could not use an input or a snapshot (the shell counts
+/// the input as rejected, logs the first of each kind and goes on). A
+/// malformed input or snapshot leaves the state as it was; a measurement
+/// refused on its merits (a gated fix, a DVL spike) may still have moved the
+/// state on to its stamp, and the outputs pushed before the error are
+/// published.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("{kind}: {detail}")]
 pub struct EstimatorError {
