@@ -78,17 +78,18 @@ impl<M: Message> Publisher<M> {
         h.instance = self.instance;
         h.flags |= Flags::VALID.0;
         h.reserved = 0;
-        self.seq += 1;
-        self.published += 1;
-        self.pending = true;
         // A long batch wakes its subscribers before their queues can fill:
         // in `sim` a publisher blocked on a full queue would otherwise wait
         // for a subscriber that was never told to drain it, until the
-        // deadline gives the delivery up.
-        self.unnotified += 1;
+        // deadline gives the delivery up. (Before this message is counted,
+        // so that it stays pending for the batch's own flush.)
         if self.unnotified >= self.notify_every {
             self.flush();
         }
+        self.seq += 1;
+        self.published += 1;
+        self.pending = true;
+        self.unnotified += 1;
         match self.inner.send_copy(msg) {
             Ok(_) => Ok(()),
             Err(SendError::UnableToDeliver) => {

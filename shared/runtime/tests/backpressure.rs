@@ -13,6 +13,18 @@ use nauta_runtime::{Connect, Context, Namespace, services};
 
 #[test]
 fn a_batch_longer_than_the_subscriber_queue_is_delivered_without_giving_up() {
+    batch_is_delivered(services::imu().buffer + 8);
+}
+
+/// A batch that ends exactly where the publisher notifies on its own: its
+/// last message must still be notified by the batch's flush.
+#[test]
+fn a_batch_of_half_a_queue_is_delivered_whole() {
+    batch_is_delivered(services::imu().buffer / 2);
+    batch_is_delivered(services::imu().buffer);
+}
+
+fn batch_is_delivered(n: usize) {
     let (done_tx, done_rx) = mpsc::channel::<()>();
     // Watchdog: a stuck test fails instead of hanging CI.
     std::thread::spawn(move || {
@@ -23,7 +35,6 @@ fn a_batch_longer_than_the_subscriber_queue_is_delivered_without_giving_up() {
     });
     let ns = Namespace::unique();
     let spec = services::imu();
-    let n = spec.buffer + 8;
     let mut settings = Context::settings(Role::Sensor);
     settings.deadline = Duration::from_millis(500);
     let ctx = Context::new(&ns, settings).expect("publisher node");
