@@ -18,6 +18,7 @@
 //! - [`suite`]: the seeded sensor suite that turns each truth step into the
 //!   measurements due (IMU, AHRS, DVL, depth, GPS, propeller, buoy modem, LBL).
 
+pub mod ains_inputs;
 pub mod environment;
 pub mod guidance;
 pub mod manoeuvre;

@@ -7,7 +7,7 @@ use nauta_estimation::Estimator;
 use nauta_estimation::ains::AinsInput;
 use nauta_estimation::ains::dr::{DeadReckoning, DrParams, DrStats, Site};
 use nauta_estimation::frames::Vector;
-use nauta_estimation::readings::{Ahrs, Depth, Dvl, Gps, Imu, Nav};
+use nauta_estimation::readings::{Dvl, Nav};
 use nauta_sim::mission::Origin;
 use nauta_sim::noise::DvlSpec;
 use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams};
@@ -52,48 +52,9 @@ pub fn site(g: &Generator) -> Site {
 /// One step's readings as inputs, appended to `out`.
 pub fn inputs(m: &Measurements, out: &mut Vec<AinsInput>) {
     if let Some(r) = &m.imu {
-        out.push(AinsInput::Imu(Imu {
-            stamp_ns: r.stamp_ns,
-            interval_s: r.interval_s,
-            gyro_rad_s: Vector::from_array(r.gyro_rad_s),
-            accel_m_s2: Vector::from_array(r.accel_m_s2),
-            mag_ut: Vector::from_array(r.mag_ut),
-        }));
+        out.push(AinsInput::Imu(nauta_sim::ains_inputs::imu(r)));
     }
-    if let Some(r) = &m.dvl {
-        out.push(AinsInput::Dvl(Dvl {
-            stamp_ns: r.stamp_ns,
-            velocity_body_m_s: Vector::from_array(r.velocity_body_m_s),
-            altitude_m: r.altitude_m,
-            beams_valid: r.beams_valid as u8,
-            bottom_lock: r.bottom_lock != 0,
-        }));
-    }
-    if let Some(r) = &m.depth {
-        out.push(AinsInput::Depth(Depth {
-            stamp_ns: r.stamp_ns,
-            depth_m: r.depth_m,
-        }));
-    }
-    if let Some(r) = &m.gps {
-        out.push(AinsInput::Gps(Gps {
-            stamp_ns: r.stamp_ns,
-            lat_rad: r.lat_rad,
-            lon_rad: r.lon_rad,
-            height_m: r.height_m,
-            horizontal_std_m: r.horizontal_std_m,
-            quality: r.quality,
-            velocity: None,
-        }));
-    }
-    if let Some(r) = &m.ahrs {
-        out.push(AinsInput::Ahrs(Ahrs {
-            stamp_ns: r.stamp_ns,
-            roll_rad: r.roll_rad,
-            pitch_rad: r.pitch_rad,
-            heading_mag_rad: r.heading_mag_rad,
-        }));
-    }
+    nauta_sim::ains_inputs::aiding(m, false, out);
 }
 
 /// Adds paper 002 Fig. 5's spikes to locked DVL samples, drawn as the

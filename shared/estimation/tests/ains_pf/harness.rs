@@ -16,9 +16,8 @@ use nauta_estimation::attitude_core::{
     AttitudeCore, MekfVariantParams, PfVariantParams, VariantParams,
 };
 use nauta_estimation::earth::{meridian_radius, transverse_radius};
-use nauta_estimation::frames::Vector;
 use nauta_estimation::frames::{Frd, Ned, Rotation};
-use nauta_estimation::readings::{Ahrs, Attitude, Depth, Dvl, Gps, Imu, Nav};
+use nauta_estimation::readings::{Attitude, Nav};
 use nauta_sim::mission::Origin;
 use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams};
 use nauta_sim::suite::{Measurements, SuiteConfig, TruthReading};
@@ -116,13 +115,7 @@ impl AttitudeScore {
 /// runs on the IMU sample and its estimate follows it.
 pub fn inputs(m: &Measurements, att: &mut AttitudeCore, out: &mut Vec<AinsInput>) {
     if let Some(r) = &m.imu {
-        let imu = Imu {
-            stamp_ns: r.stamp_ns,
-            interval_s: r.interval_s,
-            gyro_rad_s: Vector::from_array(r.gyro_rad_s),
-            accel_m_s2: Vector::from_array(r.accel_m_s2),
-            mag_ut: Vector::from_array(r.mag_ut),
-        };
+        let imu = nauta_sim::ains_inputs::imu(r);
         out.push(AinsInput::Imu(imu));
         if let Some(o) = att.step(&imu).expect("attitude step") {
             out.push(AinsInput::Attitude(Attitude {
@@ -133,40 +126,7 @@ pub fn inputs(m: &Measurements, att: &mut AttitudeCore, out: &mut Vec<AinsInput>
             }));
         }
     }
-    if let Some(r) = &m.dvl {
-        out.push(AinsInput::Dvl(Dvl {
-            stamp_ns: r.stamp_ns,
-            velocity_body_m_s: Vector::from_array(r.velocity_body_m_s),
-            altitude_m: r.altitude_m,
-            beams_valid: r.beams_valid as u8,
-            bottom_lock: r.bottom_lock != 0,
-        }));
-    }
-    if let Some(r) = &m.depth {
-        out.push(AinsInput::Depth(Depth {
-            stamp_ns: r.stamp_ns,
-            depth_m: r.depth_m,
-        }));
-    }
-    if let Some(r) = &m.gps {
-        out.push(AinsInput::Gps(Gps {
-            stamp_ns: r.stamp_ns,
-            lat_rad: r.lat_rad,
-            lon_rad: r.lon_rad,
-            height_m: r.height_m,
-            horizontal_std_m: r.horizontal_std_m,
-            quality: r.quality,
-            velocity: None,
-        }));
-    }
-    if let Some(r) = &m.ahrs {
-        out.push(AinsInput::Ahrs(Ahrs {
-            stamp_ns: r.stamp_ns,
-            roll_rad: r.roll_rad,
-            pitch_rad: r.pitch_rad,
-            heading_mag_rad: r.heading_mag_rad,
-        }));
-    }
+    nauta_sim::ains_inputs::aiding(m, false, out);
 }
 
 /// North, east, down error of a solution against the truth, m.
