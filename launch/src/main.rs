@@ -92,7 +92,7 @@ enum Command {
         which: CalibrateCommand,
     },
     /// Turn an outside data set into a recording to replay:
-    /// `nauta import broad TRIAL.csv.gz -o OUT.mcap`.
+    /// `nauta import broad TRIAL.csv.gz -o OUT.mcap`, `nauta import csv DIR -o OUT.mcap`.
     Import {
         #[command(subcommand)]
         which: ImportCommand,
@@ -128,6 +128,11 @@ enum ImportCommand {
     /// `Data/TrajectoryN/`): its reference INS as the truth and the AHRS and
     /// depth, its DVL, and with `--imu` its 100 Hz IMU.
     Akit(import::akit::ImportAkitArgs),
+    /// Any vehicle's log: `site.toml` and one CSV file per channel (`imu.csv`,
+    /// `dvl.csv`, `ahrs.csv`, `depth.csv`, `gps.csv`, `modem.csv`, `lbl.csv`,
+    /// `propeller.csv`, `truth.csv`; each optional; columns in the README),
+    /// with a manifest that runs the estimators the channels allow.
+    Csv(import::csv::ImportCsvArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -246,6 +251,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Import { which } => match which {
             ImportCommand::Broad(args) => import::broad(&args),
             ImportCommand::Akit(args) => import::akit::akit(&args),
+            ImportCommand::Csv(args) => import::csv::csv(&args),
         },
         Command::Bench { which } => match which {
             BenchCommand::Log { json } => bench::log::run(json).map(|()| ExitCode::SUCCESS),
