@@ -236,3 +236,95 @@ fn kill_9_and_swap_of_the_ains_keep_every_stamp_exactly_once() {
     assert_eq!(s.gaps(), Some(0), "{s}");
     assert!(s.all_exited_0(), "{s}");
 }
+
+/// Issue 13 (and 14: positioning merges `ains/nav` by the ains's
+/// watermark): a role's watermark promises that nothing earlier is still to
+/// come, whatever the variant. `pf` publishes one solution per IMU sample, so
+/// the IMU must hold the watermark back as the DVL and the AHRS do: a
+/// progress message at stamp W after P solutions means every solution from
+/// the P-th on is stamped W or later. The ains runs `pf` behind the attitude
+/// (whose lag keeps IMU samples waiting in the ains's merge), in `wall` clock
+/// so that this test's subscribers see every message.
+#[test]
+fn the_ains_watermark_never_passes_a_solution_still_to_come() {
+    bin_dir();
+    let wd = Watchdog::new("ains_watermark", BOUND);
+    let ns = Namespace::unique();
+    let watch = EventWatch::with_clock(
+        &ns,
+        Duration::from_millis(500),
+        ClockMode::Wall { rate: 4.0 },
+    );
+    let (mut nav, _nav_inbox) = watch
+        .ctx
+        .subscriber(&services::nav_solution())
+        .expect("ains/nav");
+    let (mut progress, _progress_inbox) = watch
+        .ctx
+        .subscriber(&services::progress(nauta_messages::Role::Ains))
+        .expect("ains/progress");
+    let mut launch = start_launch_manifest_with(
+        &wd,
+        &dr_manifest(),
+        &[
+            "--clock",
+            "wall",
+            "--rate",
+            "4",
+            "--duration",
+            "40",
+            "--namespace",
+            ns.as_str(),
+            "--set",
+            "ains.variant=pf",
+        ],
+        None,
+    );
+    // (seq, stamp) of instance 0's solutions; (published, watermark).
+    let (mut solutions, mut marks) = (Vec::new(), Vec::new());
+    let mut poll = |solutions: &mut Vec<(u64, u64)>, marks: &mut Vec<(u64, u64)>| {
+        nav.drain(|n| {
+            if n.header.instance == 0 {
+                solutions.push((n.header.seq, n.header.stamp_ns));
+            }
+        })
+        .expect("ains/nav");
+        progress
+            .drain(|p| {
+                if p.header.instance == 0 && !p.header.is_end_of_stream() {
+                    marks.push((p.published, p.header.stamp_ns));
+                }
+            })
+            .expect("ains/progress");
+    };
+    while launch.is_running() {
+        wd.check();
+        poll(&mut solutions, &mut marks);
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let out = launch.wait(&wd);
+    poll(&mut solutions, &mut marks);
+    watch.finish();
+    assert_eq!(out.code(), Some(0), "{out}");
+    // Every solution seen, in order (a lost one would hide a violation).
+    assert!(
+        solutions.len() > 1000,
+        "{} solutions\n{out}",
+        solutions.len()
+    );
+    for (k, &(seq, _)) in solutions.iter().enumerate() {
+        assert_eq!(seq, k as u64, "solution {k} missing or repeated");
+    }
+    assert!(marks.len() > 10, "{} watermarks", marks.len());
+    let mut checked = 0;
+    for &(published, w) in &marks {
+        if let Some(&(_, stamp)) = solutions.get(published as usize) {
+            assert!(
+                stamp >= w,
+                "watermark {w} ns after {published} solutions, but solution {published} is stamped {stamp} ns"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 10, "{checked} watermarks checked");
+}

@@ -6,8 +6,10 @@
 //! Inputs (ties at one stamp are taken in this order): IMU, DVL, depth, GPS,
 //! AHRS from the sensor, then `attitude/estimate` and `positioning/fix`, both
 //! optional (a run without an attitude or a positioning process runs without
-//! them: the launcher passes `--absent`). The AHRS and the DVL trigger
-//! outputs (`ains/nav`); the others only correct the state.
+//! them: the launcher passes `--absent`). The IMU (`pf`, `ekf`: one solution
+//! per sample), the DVL and the AHRS (`dr`) trigger outputs (`ains/nav`), so
+//! the role's watermark follows the earliest of the three whatever the
+//! variant; the others only correct the state.
 
 use std::process::ExitCode;
 
@@ -30,7 +32,7 @@ struct Args {
 fn main() -> ExitCode {
     let args = Args::parse();
     Shell::<AinsCore>::new(Role::Ains, &VARIANTS)
-        .aiding(services::imu(), Role::Sensor, AinsInput::Imu)
+        .input(services::imu(), Role::Sensor, AinsInput::Imu)
         .input(services::dvl(), Role::Sensor, AinsInput::Dvl)
         .aiding(services::depth(), Role::Sensor, AinsInput::Depth)
         .aiding(services::gps(), Role::Sensor, AinsInput::Gps)
@@ -65,6 +67,7 @@ fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result
             manifest.path.display()
         )
     })?;
+    site.log_declination();
     let site = Site {
         lat_rad: site.latitude_deg.to_radians(),
         lon_rad: site.longitude_deg.to_radians(),
