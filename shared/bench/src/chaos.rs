@@ -9,9 +9,10 @@
 //! snapshots (docs/design-notes.md, "Supervision"). Both runs are read from
 //! the launcher's JSON summary (`nauta launch --json`): the attitude error is
 //! its `errors` (`nauta eval`'s computation), the losses its `gaps` and
-//! `lost`. The bench itself follows `attitude/estimate` for what only a
-//! consumer sees: stamps missing or repeated across the restarts and each
-//! instance's first output.
+//! `lost`. The bench itself follows the estimators' outputs
+//! (`attitude/estimate`, `ains/nav`) for what only a consumer sees: stamps
+//! missing or repeated across the restarts and each instance's first output
+//! (the restart latency of a killed attitude or ains).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -21,7 +22,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, bail};
 use nauta_messages::*;
 use nauta_runtime::ports::Inbox;
-use nauta_runtime::{ClockMode, Context, Namespace, Subscriber, services};
+use nauta_runtime::{ClockMode, Context, Manifest, Namespace, Subscriber, services};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
@@ -57,58 +58,58 @@ pub struct ChaosArgs {
     pub variant: String,
 }
 
-/// Follows the attitude stream and the run events.
+/// The estimators' output streams the bench follows, each with the process
+/// that publishes it in the shipped manifests.
+const FOLLOWED: [(&str, &str); 2] = [
+    (ATTITUDE_ESTIMATE_SERVICE, "attitude"),
+    (NAV_SOLUTION_SERVICE, "ains"),
+];
+
+/// Follows the estimators' outputs and the run events.
 struct Follower {
     estimates: Subscriber<AttitudeEstimate>,
+    nav: Subscriber<NavSolution>,
     events: Subscriber<RunEvent>,
-    _inboxes: [Inbox; 2],
-    last_stamp: Option<u64>,
-    /// Stamps missing from the estimate stream (after its first).
-    missing: u64,
-    /// Stamps received twice or going backwards.
-    repeated: u64,
-    /// First arrival of each instance.
-    first_of_instance: BTreeMap<u32, Instant>,
+    _inboxes: [Inbox; 3],
+    /// Every stamp of each followed stream, in arrival order.
+    stamps: [Vec<u64>; 2],
+    /// First arrival of each (process, instance).
+    first_of_instance: BTreeMap<(&'static str, u32), Instant>,
     /// Run events: (kind, process, instance).
     events_seen: Vec<(u32, String, u32)>,
-    period_ns: u64,
 }
 
 impl Follower {
     fn new(ctx: &Context) -> anyhow::Result<Self> {
         let (estimates, a) = ctx.subscriber(&services::attitude_estimate())?;
-        let (events, b) = ctx.subscriber(&services::run_events())?;
+        let (nav, b) = ctx.subscriber(&services::nav_solution())?;
+        let (events, c) = ctx.subscriber(&services::run_events())?;
         Ok(Self {
             estimates,
+            nav,
             events,
-            _inboxes: [a, b],
-            last_stamp: None,
-            missing: 0,
-            repeated: 0,
+            _inboxes: [a, b, c],
+            stamps: [Vec::new(), Vec::new()],
             first_of_instance: BTreeMap::new(),
             events_seen: Vec::new(),
-            period_ns: 10_000_000,
         })
     }
 
     fn poll(&mut self) -> anyhow::Result<()> {
         let now = Instant::now();
-        let (first, last_stamp, missing, repeated, period_ns) = (
-            &mut self.first_of_instance,
-            &mut self.last_stamp,
-            &mut self.missing,
-            &mut self.repeated,
-            self.period_ns,
-        );
+        let first = &mut self.first_of_instance;
+        let [att, nav] = &mut self.stamps;
         self.estimates.drain(|e| {
-            first.entry(e.header.instance).or_insert(now);
-            let s = e.header.stamp_ns;
-            match *last_stamp {
-                Some(last) if s <= last => *repeated += 1,
-                Some(last) => *missing += (s - last) / period_ns - 1,
-                None => {}
-            }
-            *last_stamp = Some(last_stamp.map_or(s, |l| l.max(s)));
+            first
+                .entry((FOLLOWED[0].1, e.header.instance))
+                .or_insert(now);
+            att.push(e.header.stamp_ns);
+        })?;
+        self.nav.drain(|n| {
+            first
+                .entry((FOLLOWED[1].1, n.header.instance))
+                .or_insert(now);
+            nav.push(n.header.stamp_ns);
         })?;
         let seen = &mut self.events_seen;
         self.events.drain(|e| {
@@ -116,6 +117,20 @@ impl Follower {
         })?;
         Ok(())
     }
+}
+
+/// Stamps missing from a stream (after its first, at its smallest step) and
+/// stamps received twice or going backwards.
+fn missing_and_repeated(stamps: &[u64]) -> (u64, u64) {
+    let repeated = stamps.windows(2).filter(|w| w[1] <= w[0]).count() as u64;
+    let mut sorted = stamps.to_vec();
+    sorted.sort_unstable();
+    sorted.dedup();
+    let Some(period) = sorted.windows(2).map(|w| w[1] - w[0]).min() else {
+        return (0, repeated);
+    };
+    let missing = sorted.windows(2).map(|w| (w[1] - w[0]) / period - 1).sum();
+    (missing, repeated)
 }
 
 /// RMS roll, pitch, yaw (degrees) of `attitude/estimate` in a JSON summary,
@@ -201,10 +216,20 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
             &rate,
             "--namespace",
             ns.as_str(),
-            "--set",
-            "attitude.restart={ policy = \"on-failure\", max = 1000, window_s = 60, backoff_ms = [0, 100] }",
         ],
     );
+    // Every estimator restarts as often as it is killed.
+    let mut args = args;
+    for name in Manifest::load(&a.manifest)?.processes.keys() {
+        if name != Role::Sensor.name() && name != "logger" {
+            args.extend([
+                "--set".into(),
+                format!(
+                    "{name}.restart={{ policy = \"on-failure\", max = 1000, window_s = 60, backoff_ms = [0, 100] }}"
+                ),
+            ]);
+        }
+    }
     let mut child: Child = Command::new(&exe)
         .args(&args)
         .stdout(Stdio::piped())
@@ -260,18 +285,20 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
     }
     let summary = super::summary(&out).context("the run with kills")?;
     drop(follower.estimates);
+    drop(follower.nav);
     let events = std::mem::take(&mut follower.events_seen);
     drop(follower.events);
     drop(follower._inboxes);
     ctx.finish();
 
-    // Restart latency: kill to the first estimate of the next instance.
+    // Restart latency: kill to the first output of the next instance.
     let mut latencies: Vec<f64> = kills
         .iter()
-        .filter_map(|(t, _, instance)| {
+        .filter_map(|(t, name, instance)| {
+            let (_, process) = FOLLOWED.iter().find(|(_, p)| p == name)?;
             follower
                 .first_of_instance
-                .get(&(instance + 1))
+                .get(&(*process, instance + 1))
                 .map(|first| first.duration_since(*t).as_secs_f64() * 1e3)
         })
         .collect();
@@ -298,8 +325,12 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         .fold(0.0f64, f64::max);
     let count = |key: &str| summary[key].as_u64().unwrap_or(u64::MAX);
     let (gaps, in_processes) = (count("gaps"), count("lost"));
-    let lost_estimates = follower.missing + follower.repeated;
+    let [(att_missing, att_repeated), (nav_missing, nav_repeated)] =
+        [0, 1].map(|k| missing_and_repeated(&follower.stamps[k]));
+    let lost_estimates = att_missing + att_repeated;
+    let lost_nav = nav_missing + nav_repeated;
     let lost = lost_estimates
+        .saturating_add(lost_nav)
         .saturating_add(gaps)
         .saturating_add(in_processes);
     let report = json!({
@@ -312,6 +343,7 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         "lost_messages": lost,
         "lost_per_consumer": {
             "attitude/estimate stream (missing or repeated stamps)": lost_estimates,
+            "ains/nav stream (missing or repeated stamps)": lost_nav,
             "launcher taps (sequence gaps)": gaps,
             "inside processes (health dropped)": in_processes,
         },
