@@ -48,6 +48,7 @@ fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result
             manifest.path.display()
         )
     })?;
+    site.log_declination();
     AttitudeCore::new(
         &params,
         site.latitude_deg.to_radians(),

@@ -52,6 +52,7 @@ pub mod estimator;
 pub mod frames;
 pub mod gyro;
 pub mod local;
+pub mod magnetic;
 pub mod mekf;
 pub mod params;
 pub mod pf;

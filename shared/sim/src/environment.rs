@@ -12,12 +12,8 @@
 
 use nalgebra::Vector3;
 use thiserror::Error;
-use world_magnetic_model::GeomagneticField;
-use world_magnetic_model::time::Date;
-use world_magnetic_model::uom::si::angle::{degree, radian};
-use world_magnetic_model::uom::si::f32::{Angle, Length};
-use world_magnetic_model::uom::si::length::meter;
-use world_magnetic_model::uom::si::magnetic_flux_density::nanotesla;
+
+use nauta_estimation::magnetic::{WmmError, wmm};
 
 pub use nauta_estimation::earth::{
     earth_rate_ned, meridian_radius, normal_gravity, transport_rate_ned, transverse_radius, wgs84,
@@ -68,13 +64,7 @@ pub fn gravity_ned(lat_rad: f64, height_m: f64) -> Vector3<f64> {
 // ---------------------------------------------------------------------------
 
 /// The geomagnetic (main, core) field at one place and date, from the NOAA World
-/// Magnetic Model (WMM2025 for 2025-2029, WMM2020 before) through the
-/// `world_magnetic_model` crate (Chulliat et al. 2025, "The US/UK World Magnetic
-/// Model for 2025-2030", NOAA NCEI technical report).
-///
-/// The model is evaluated in `f32` by the crate; its own accuracy (WMM error
-/// model, ~0.3-0.4° in declination, ~150 nT in intensity, 1σ) is far coarser.
-/// Crustal anomalies and disturbances are not modelled.
+/// Magnetic Model ([`nauta_estimation::magnetic`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MagneticField {
     /// Field in NED (north X, east Y, down Z), tesla.
@@ -103,25 +93,16 @@ impl MagneticField {
         )?;
         check("lon_rad", lon_rad, true)?;
         check("height_m", height_m, true)?;
-        let date = Date::from_ordinal_date(year, day_of_year)
-            .map_err(|_| EnvironmentError::InvalidDate { year, day_of_year })?;
-        let lon = nauta_estimation::attitude::wrap_pi(lon_rad);
-        let f = GeomagneticField::new(
-            Length::new::<meter>(height_m as f32),
-            Angle::new::<radian>(lat_rad as f32),
-            Angle::new::<radian>(lon as f32),
-            date,
-        )
-        .map_err(|e| EnvironmentError::Wmm(e.to_string()))?;
-        let nt = 1e-9;
+        let f = wmm(lat_rad, lon_rad, height_m, year, day_of_year).map_err(|e| match e {
+            WmmError::InvalidDate { year, day_of_year } => {
+                EnvironmentError::InvalidDate { year, day_of_year }
+            }
+            e => EnvironmentError::Wmm(e.to_string()),
+        })?;
         Ok(Self {
-            ned_t: Vector3::new(
-                f64::from(f.x().get::<nanotesla>()) * nt,
-                f64::from(f.y().get::<nanotesla>()) * nt,
-                f64::from(f.z().get::<nanotesla>()) * nt,
-            ),
-            declination_rad: f64::from(f.declination().get::<degree>()).to_radians(),
-            inclination_rad: f64::from(f.inclination().get::<degree>()).to_radians(),
+            ned_t: Vector3::from(f.ned_t),
+            declination_rad: f.declination_rad,
+            inclination_rad: f.inclination_rad,
         })
     }
 

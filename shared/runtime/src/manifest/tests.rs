@@ -251,3 +251,39 @@ fn overrides() {
     let p: P = m.params("attitude", None).expect("params");
     assert!((p.gain - 2.0).abs() < 1e-12);
 }
+
+/// Issue 13: "the site's declination, from the manifest, else the WMM". A
+/// site without `magnetic_declination_deg` takes the World Magnetic Model's
+/// at the site today (Lisbon: about −1°, westerly); a written one is kept,
+/// and a non-finite one is refused, not replaced.
+#[test]
+fn a_site_without_declination_takes_the_world_magnetic_models() {
+    let m = Manifest::parse(Path::new("m.toml"), GOOD).expect("parses");
+    let site = m.site.expect("a site");
+    assert!(
+        matches!(site.declination_from, DeclinationSource::Wmm { .. }),
+        "{site:?}"
+    );
+    assert!(
+        (-2.5..0.5).contains(&site.magnetic_declination_deg),
+        "{site:?}"
+    );
+    let given = GOOD.replace(
+        "longitude_deg = -9.1",
+        "longitude_deg = -9.1\nmagnetic_declination_deg = 3.25",
+    );
+    let site = Manifest::parse(Path::new("m.toml"), &given)
+        .expect("parses")
+        .site
+        .expect("a site");
+    assert_eq!(site.declination_from, DeclinationSource::Manifest);
+    assert_eq!(site.magnetic_declination_deg, 3.25);
+    let nan = GOOD.replace(
+        "longitude_deg = -9.1",
+        "longitude_deg = -9.1\nmagnetic_declination_deg = nan",
+    );
+    let e = Manifest::parse(Path::new("m.toml"), &nan)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("magnetic_declination_deg"), "{e}");
+}
