@@ -300,7 +300,9 @@ fn stamp_ns(t_s: f64) -> u64 {
     ((t_s + 1.0) * 1e9).round() as u64
 }
 
-fn manifest(t: &Trajectory, variant: &str, duration_s: f64) -> String {
+/// The manifest a recording of `t` carries: the ains (`variant`) on its
+/// channels, the site at the first reference sample, declination 0.
+pub fn manifest(t: &Trajectory, variant: &str, duration_s: f64) -> String {
     let r0 = &t.reference[0];
     let (lat, lon) = (r0.lat_rad.to_degrees(), r0.lon_rad.to_degrees());
     let name = &t.name;
@@ -368,7 +370,28 @@ pub fn write(t: &Trajectory, source: &Path, out: &Path, variant: &str) -> anyhow
     }
     w.metadata("nauta.import", import)?;
 
-    // Every message at its stamp, in stamp order (ties: the sensor's order).
+    let messages = messages(t);
+    for (s, _, m) in &messages {
+        match m {
+            SensorMessage::Truth(x) => w.write_message(TRUTH_SERVICE, *s, x)?,
+            SensorMessage::Ahrs(x) => w.write_message(AHRS_SERVICE, *s, x)?,
+            SensorMessage::Depth(x) => w.write_message(DEPTH_SERVICE, *s, x)?,
+            SensorMessage::Gps(x) => w.write_message(GPS_SERVICE, *s, x)?,
+            SensorMessage::Dvl(x) => w.write_message(DVL_SERVICE, *s, x)?,
+            SensorMessage::Imu(x) => w.write_message(IMU_SERVICE, *s, x)?,
+            _ => {}
+        }
+    }
+    w.finish()?;
+    Ok(messages.len() as u64)
+}
+
+/// The messages of `t` as a recording of it holds them: (stamp, the
+/// sensor's publishing order, message), in stamp order (ties: that order).
+/// The reference on `sim/truth`, its attitude on `sensor/ahrs`, its depth on
+/// `sensor/depth`, one initial fix from it on `sensor/gps`, the DVL, and the
+/// IMU when read.
+pub fn messages(t: &Trajectory) -> Vec<(u64, usize, SensorMessage)> {
     let mut messages: Vec<(u64, usize, SensorMessage)> = Vec::new();
     let mut distance_m = 0.0;
     let mut prev: Option<Reference> = None;
@@ -464,19 +487,7 @@ pub fn write(t: &Trajectory, source: &Path, out: &Path, variant: &str) -> anyhow
         }
     }
     messages.sort_by_key(|(s, order, _)| (*s, *order));
-    for (s, _, m) in &messages {
-        match m {
-            SensorMessage::Truth(x) => w.write_message(TRUTH_SERVICE, *s, x)?,
-            SensorMessage::Ahrs(x) => w.write_message(AHRS_SERVICE, *s, x)?,
-            SensorMessage::Depth(x) => w.write_message(DEPTH_SERVICE, *s, x)?,
-            SensorMessage::Gps(x) => w.write_message(GPS_SERVICE, *s, x)?,
-            SensorMessage::Dvl(x) => w.write_message(DVL_SERVICE, *s, x)?,
-            SensorMessage::Imu(x) => w.write_message(IMU_SERVICE, *s, x)?,
-            _ => {}
-        }
-    }
-    w.finish()?;
-    Ok(messages.len() as u64)
+    messages
 }
 
 /// `nauta import akit`.
