@@ -395,6 +395,60 @@ fn same_seed_same_output_bit_for_bit() {
     assert_ne!(a, c);
 }
 
+/// Rocking for 20 s, then still (the rest update of the biases, P5).
+fn rocking_then_still(t: f64) -> Vector3<f64> {
+    if t < 20.0 { rocking(t) } else { still(t) }
+}
+
+/// The loops compiled for AVX2 (when this CPU has it, else the baseline
+/// again) and for the baseline give the same filter bit for bit, through
+/// every path: tempering from the initial spread (P7), resampling (P6),
+/// the rest update (P5), prediction with and without its noise draws (P1).
+#[test]
+fn avx2_and_baseline_give_the_same_bits() {
+    #[cfg(target_arch = "x86_64")]
+    eprintln!(
+        "this CPU has AVX2: {}",
+        std::arch::is_x86_feature_detected!("avx2")
+    );
+    let c = config(&PfParams {
+        particles: 203,
+        ..small()
+    });
+    let truth0 = from_euler(0.2, -0.3, 1.9);
+    let start = from_euler(0.25, -0.25, 2.1);
+    let make = |isa| {
+        ParticleFilter::new(&c, start, LAT, DECLINATION, reference())
+            .expect("valid")
+            .with_isa(isa)
+    };
+    let mut fast = make(Isa::detect());
+    let mut base = make(Isa::baseline());
+    let mut synth = Synth::new(
+        truth0,
+        Vector3::new(2e-3, -1e-3, 1e-3),
+        11,
+        rocking_then_still,
+    );
+    for k in 0..3000 {
+        let s = synth.step();
+        step(&mut fast, &s);
+        step(&mut base, &s);
+        assert_eq!(fast.particles, base.particles, "sample {k}");
+        assert_eq!(fast.weights, base.weights, "sample {k}");
+        let (a, b) = (fast.estimate(), base.estimate());
+        assert_eq!(a.q_nb.to_wxyz(), b.q_nb.to_wxyz(), "sample {k}");
+        assert_eq!(a.std_rad, b.std_rad, "sample {k}");
+        assert_eq!(a.gyro_bias, b.gyro_bias, "sample {k}");
+    }
+    assert_eq!(fast.covariance(), base.covariance());
+    let stats = fast.stats();
+    assert_eq!(stats, base.stats());
+    assert!(stats.tempering_stages > 0, "{stats:?}");
+    assert!(stats.resamples > 0, "{stats:?}");
+    assert!(stats.rest_samples > 0, "{stats:?}");
+}
+
 /// The snapshot's covariance is the particles' weighted sample covariance
 /// (symmetric, positive diagonal); restoring re-seeds the particles around
 /// it deterministically (twice the same), keeps the estimate continuous and
