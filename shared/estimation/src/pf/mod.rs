@@ -205,9 +205,9 @@
 //! vectorises it; no per-sample allocation. One likelihood pass computes
 //! each particle's error `E_i = q̂⁻ ⊗ q_i⁻¹` once and takes from it the tilt
 //! and heading differences (P3), the sign alignment and the spread.
-//! Each of these loops is compiled twice, for the target and for AVX2, and
-//! the form is chosen at run time by the CPU's features ([`isa`]); both give
-//! the same bits.
+//! Each of these loops is compiled for the target, for AVX2 and for
+//! AVX-512F, and the form is chosen at run time by the CPU's features
+//! ([`isa`]); all give the same bits.
 
 mod aiding;
 mod cloud;
