@@ -167,7 +167,7 @@ fn parameters_default_refuse_unknown_keys_and_bad_values() {
         MapDeserializer::new([("resample_threshold", 0.3)].into_iter());
     let p = PfParams::deserialize(d).expect("known key");
     assert_eq!(p.resample_threshold, 0.3);
-    assert_eq!(p.particles, 1000);
+    assert_eq!(p.particles, 700);
     let d: MapDeserializer<_, ValueError> =
         MapDeserializer::new([("resample_treshold", 0.3)].into_iter());
     assert!(PfParams::deserialize(d).is_err());
