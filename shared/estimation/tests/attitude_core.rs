@@ -225,7 +225,7 @@ fn mekf_beats_gyro_on_the_simulator() {
 fn pf_params_default_and_refuse_unknown_keys() {
     let p: PfVariantParams = toml::from_str("").expect("defaults");
     assert_eq!(p.alignment_samples, 200);
-    assert_eq!(p.filter.particles, 1000);
+    assert_eq!(p.filter.particles, 700);
     let p: PfVariantParams =
         toml::from_str("alignment_samples = 400\nfilter = { particles = 300, seed = 3 }")
             .expect("valid");

@@ -8,6 +8,7 @@
 //! result is the same bit for bit on every run (and every x86-64, the code
 //! having no fused multiply-add).
 
+use super::isa::{Isa, dispatch};
 use super::math::{exp_nonpositive, exp_series, qmul};
 
 /// Partial sums per reduction (two SSE2 registers of `f64`).
@@ -66,6 +67,17 @@ pub(super) fn total(lanes: [f64; LANES]) -> f64 {
     lanes[1..].iter().fold(lanes[0], |a, b| a + b)
 }
 
+/// [`total`] of each of four sums' partial sums. Not inlined, on purpose:
+/// the partial sums then leave the loop that made them as four stores of
+/// [`LANES`] contiguous values, from which the compiler vectorises that loop
+/// across the lanes (a register per sum). Inlined, it vectorised the loop
+/// across the four sums instead, to take the four totals in one register,
+/// with a shuffle per value loaded: three times the instructions (callgrind).
+#[inline(never)]
+fn totals(acc: &[[f64; LANES]; 4]) -> [f64; 4] {
+    acc.map(total)
+}
+
 /// The largest of `LANES` partial maxima.
 #[inline(always)]
 fn largest(lanes: [f64; LANES]) -> f64 {
@@ -96,86 +108,35 @@ impl Cloud {
 
     /// (P1) in the body frame: `q_i ← q_i ⊗ exp(θ_i)`,
     /// `θ_i = (ω̃ − b_i) Δt + η_i`, with `η` the three axes' draws one after
-    /// the other (`3n` values). Not renormalised: `exp_series` is unit to
-    /// `|θ|⁶/4608`, and [`Cloud::rotate_nav`] renormalises every 16 samples.
-    pub(super) fn propagate<const NOISE: bool>(&mut self, omega: [f64; 3], dt: f64, eta: &[f64]) {
-        let n = self.len();
-        let zeros = [0.0; 0];
-        let (ex, ey, ez) = if NOISE {
-            let (ex, rest) = eta.split_at(n);
-            let (ey, ez) = rest.split_at(n);
-            (ex, ey, &ez[..n])
-        } else {
-            (&zeros[..], &zeros[..], &zeros[..])
-        };
-        let [qw, qx, qy, qz] = &mut self.q;
-        let (qw, qx, qy, qz) = (&mut qw[..n], &mut qx[..n], &mut qy[..n], &mut qz[..n]);
-        let [bx, by, bz] = &self.b;
-        let (bx, by, bz) = (&bx[..n], &by[..n], &bz[..n]);
-        for i in 0..n {
-            let mut theta = [
-                (omega[0] - bx[i]) * dt,
-                (omega[1] - by[i]) * dt,
-                (omega[2] - bz[i]) * dt,
-            ];
-            if NOISE {
-                theta[0] += ex[i];
-                theta[1] += ey[i];
-                theta[2] += ez[i];
-            }
-            let q = qmul(&[qw[i], qx[i], qy[i], qz[i]], &exp_series(theta));
-            qw[i] = q[0];
-            qx[i] = q[1];
-            qy[i] = q[2];
-            qz[i] = q[3];
+    /// the other (`3n` values), or `η = 0` without them. Not renormalised:
+    /// `exp_series` is unit to `|θ|⁶/4608`, and [`Cloud::rotate_nav`]
+    /// renormalises every 16 samples.
+    pub(super) fn propagate(&mut self, isa: Isa, omega: [f64; 3], dt: f64, eta: Option<&[f64]>) {
+        match eta {
+            Some(eta) => propagate_noisy(isa, self, omega, dt, eta),
+            None => propagate_plain(isa, self, omega, dt, &[]),
         }
     }
 
     /// `q_i ← nav ⊗ q_i` (the Earth rate of (P1), common to all particles),
     /// then one Newton step towards unit norm, `q ← q (3 − |q|²)/2`.
-    pub(super) fn rotate_nav(&mut self, nav: [f64; 4]) {
-        let n = self.len();
-        let [qw, qx, qy, qz] = &mut self.q;
-        let (qw, qx, qy, qz) = (&mut qw[..n], &mut qx[..n], &mut qy[..n], &mut qz[..n]);
-        for i in 0..n {
-            let q = qmul(&nav, &[qw[i], qx[i], qy[i], qz[i]]);
-            let n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-            let k = 1.5 - 0.5 * n2;
-            qw[i] = q[0] * k;
-            qx[i] = q[1] * k;
-            qy[i] = q[2] * k;
-            qz[i] = q[3] * k;
-        }
+    pub(super) fn rotate_nav(&mut self, isa: Isa, nav: [f64; 4]) {
+        rotate_nav(isa, self, nav);
     }
 
     /// `b_i ← b_i + ζ_i` with `ζ` the three axes' draws one after the other.
-    pub(super) fn add_bias(&mut self, zeta: &[f64]) {
-        let n = self.len();
-        for (b, z) in self.b.iter_mut().zip(zeta.chunks_exact(n)) {
-            for (b, z) in b.iter_mut().zip(z) {
-                *b += z;
-            }
-        }
+    pub(super) fn add_bias(&mut self, isa: Isa, zeta: &[f64]) {
+        add_bias(isa, self, zeta);
     }
 
     /// The attitude errors `E_i = r ⊗ q_i⁻¹` into `e` (navigation frame;
     /// `E_i`'s `w` is `q_i · r`).
-    pub(super) fn errors(&self, r: &[f64; 4], e: &mut [Vec<f64>; 4]) {
+    pub(super) fn errors(&self, isa: Isa, r: &[f64; 4], e: &mut [Vec<f64>; 4]) {
         let n = self.len();
         for v in e.iter_mut() {
             v.resize(n, 0.0);
         }
-        let [e0, e1, e2, e3] = e;
-        let (e0, e1, e2, e3) = (&mut e0[..n], &mut e1[..n], &mut e2[..n], &mut e3[..n]);
-        let [qw, qx, qy, qz] = &self.q;
-        let (qw, qx, qy, qz) = (&qw[..n], &qx[..n], &qy[..n], &qz[..n]);
-        for i in 0..n {
-            let (w, x, y, z) = (qw[i], qx[i], qy[i], qz[i]);
-            e0[i] = r[0] * w + r[1] * x + r[2] * y + r[3] * z;
-            e1[i] = -r[0] * x + r[1] * w - r[2] * z + r[3] * y;
-            e2[i] = -r[0] * y + r[1] * z + r[2] * w - r[3] * x;
-            e3[i] = -r[0] * z - r[1] * y + r[2] * x + r[3] * w;
-        }
+        errors(isa, self, r, e);
     }
 
     /// Copies of the particles `parents` (in that order) into `out`.
@@ -187,6 +148,102 @@ impl Cloud {
             d.extend(parents.iter().map(|&i| s[i as usize]));
         }
     }
+}
+
+/// [`Cloud::propagate`]'s loop, with the draws `eta` if `NOISE`.
+#[inline(always)]
+fn propagate_body<const NOISE: bool>(cloud: &mut Cloud, omega: [f64; 3], dt: f64, eta: &[f64]) {
+    let n = cloud.len();
+    let zeros = [0.0; 0];
+    let (ex, ey, ez) = if NOISE {
+        let (ex, rest) = eta.split_at(n);
+        let (ey, ez) = rest.split_at(n);
+        (ex, ey, &ez[..n])
+    } else {
+        (&zeros[..], &zeros[..], &zeros[..])
+    };
+    let [qw, qx, qy, qz] = &mut cloud.q;
+    let (qw, qx, qy, qz) = (&mut qw[..n], &mut qx[..n], &mut qy[..n], &mut qz[..n]);
+    let [bx, by, bz] = &cloud.b;
+    let (bx, by, bz) = (&bx[..n], &by[..n], &bz[..n]);
+    for i in 0..n {
+        let mut theta = [
+            (omega[0] - bx[i]) * dt,
+            (omega[1] - by[i]) * dt,
+            (omega[2] - bz[i]) * dt,
+        ];
+        if NOISE {
+            theta[0] += ex[i];
+            theta[1] += ey[i];
+            theta[2] += ez[i];
+        }
+        let q = qmul(&[qw[i], qx[i], qy[i], qz[i]], &exp_series(theta));
+        qw[i] = q[0];
+        qx[i] = q[1];
+        qy[i] = q[2];
+        qz[i] = q[3];
+    }
+}
+
+/// [`Cloud::rotate_nav`]'s loop.
+#[inline(always)]
+fn rotate_nav_body(cloud: &mut Cloud, nav: [f64; 4]) {
+    let n = cloud.len();
+    let [qw, qx, qy, qz] = &mut cloud.q;
+    let (qw, qx, qy, qz) = (&mut qw[..n], &mut qx[..n], &mut qy[..n], &mut qz[..n]);
+    for i in 0..n {
+        let q = qmul(&nav, &[qw[i], qx[i], qy[i], qz[i]]);
+        let n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+        let k = 1.5 - 0.5 * n2;
+        qw[i] = q[0] * k;
+        qx[i] = q[1] * k;
+        qy[i] = q[2] * k;
+        qz[i] = q[3] * k;
+    }
+}
+
+/// [`Cloud::add_bias`]'s loop.
+#[inline(always)]
+fn add_bias_body(cloud: &mut Cloud, zeta: &[f64]) {
+    let n = cloud.len();
+    for (b, z) in cloud.b.iter_mut().zip(zeta.chunks_exact(n)) {
+        for (b, z) in b.iter_mut().zip(z) {
+            *b += z;
+        }
+    }
+}
+
+/// [`Cloud::errors`]'s loop (`e` already of the cloud's length).
+#[inline(always)]
+fn errors_body(cloud: &Cloud, r: &[f64; 4], e: &mut [Vec<f64>; 4]) {
+    let n = cloud.len();
+    let [e0, e1, e2, e3] = e;
+    let (e0, e1, e2, e3) = (&mut e0[..n], &mut e1[..n], &mut e2[..n], &mut e3[..n]);
+    let [qw, qx, qy, qz] = &cloud.q;
+    let (qw, qx, qy, qz) = (&qw[..n], &qx[..n], &qy[..n], &qz[..n]);
+    for i in 0..n {
+        let (w, x, y, z) = (qw[i], qx[i], qy[i], qz[i]);
+        e0[i] = r[0] * w + r[1] * x + r[2] * y + r[3] * z;
+        e1[i] = -r[0] * x + r[1] * w - r[2] * z + r[3] * y;
+        e2[i] = -r[0] * y + r[1] * z + r[2] * w - r[3] * x;
+        e3[i] = -r[0] * z - r[1] * y + r[2] * x + r[3] * w;
+    }
+}
+
+dispatch! {
+    fn propagate_noisy(cloud: &mut Cloud, omega: [f64; 3], dt: f64, eta: &[f64]) = propagate_body::<true>;
+}
+dispatch! {
+    fn propagate_plain(cloud: &mut Cloud, omega: [f64; 3], dt: f64, eta: &[f64]) = propagate_body::<false>;
+}
+dispatch! {
+    fn rotate_nav(cloud: &mut Cloud, nav: [f64; 4]) = rotate_nav_body;
+}
+dispatch! {
+    fn add_bias(cloud: &mut Cloud, zeta: &[f64]) = add_bias_body;
+}
+dispatch! {
+    fn errors(cloud: &Cloud, r: &[f64; 4], e: &mut [Vec<f64>; 4]) = errors_body;
 }
 
 /// The aiding pair of (P3) about a reference `r`: `a = q_acc ⊗ r⁻¹`,
@@ -221,12 +278,8 @@ pub(super) struct PassOut<'a> {
 /// holds when every `lw_i ≤ 0` on entry (the largest is 0 after each update
 /// and after a resampling) and the likelihood is not far narrower than the
 /// cloud; otherwise the caller weighs again about the largest.
-pub(super) fn likelihood_pass(
-    cloud: &mut Cloud,
-    aid: &AidAbout,
-    alpha: f64,
-    out: PassOut<'_>,
-) -> f64 {
+#[inline(always)]
+fn likelihood_pass_body(cloud: &mut Cloud, aid: &AidAbout, alpha: f64, out: PassOut<'_>) -> f64 {
     let n = cloud.len();
     for v in out.e.iter_mut() {
         v.resize(n, 0.0);
@@ -278,7 +331,8 @@ pub(super) fn likelihood_pass(
 }
 
 /// `lw_i ← lw_i + α δ_i`; returns the largest `lw_i`.
-pub(super) fn add_log_likelihoods(lw: &mut [f64], delta: &[f64], alpha: f64) -> f64 {
+#[inline(always)]
+fn add_log_likelihoods_body(lw: &mut [f64], delta: &[f64], alpha: f64) -> f64 {
     let n = lw.len();
     let delta = &delta[..n];
     let mut max = [f64::NEG_INFINITY; LANES];
@@ -300,7 +354,8 @@ pub(super) fn add_log_likelihoods(lw: &mut [f64], delta: &[f64], alpha: f64) -> 
 /// The weights `w_i = exp(lw_i − max)` into `weights` (with `lw_i ← lw_i −
 /// max`), and their moments about `r` from the errors `e` (taken about `r`);
 /// `signed` is scratch.
-pub(super) fn weigh(
+#[inline(always)]
+fn weigh_body(
     cloud: &mut Cloud,
     max: f64,
     e: &[Vec<f64>; 4],
@@ -315,7 +370,7 @@ pub(super) fn weigh(
         *l -= max;
         *w = exp_nonpositive(*l);
     }
-    moments(e, &cloud.b, weights, r, signed)
+    moments_body(e, &cloud.b, weights, r, signed)
 }
 
 /// `v[..n]` as whole chunks of [`LANES`].
@@ -342,7 +397,8 @@ fn mul_add_sq(acc: &mut [f64; LANES], w: &[f64; LANES], y: &[f64; LANES]) {
 
 /// The moments of the cloud with `weights` about `r`, from its errors `e`
 /// taken about `r`; `signed` is scratch (`s_i w_i`).
-pub(super) fn moments(
+#[inline(always)]
+fn moments_body(
     e: &[Vec<f64>; 4],
     b: &[Vec<f64>; 3],
     weights: &[f64],
@@ -357,11 +413,12 @@ pub(super) fn moments(
             .zip(&e[0][..n])
             .map(|(&w, &e0)| if e0 < 0.0 { -w } else { w }),
     );
-    signed_moments(e, b, weights, signed, r)
+    signed_moments_body(e, b, weights, signed, r)
 }
 
 /// [`moments`] with the signed weights `s_i w_i` already in `signed`.
-pub(super) fn signed_moments(
+#[inline(always)]
+fn signed_moments_body(
     e: &[Vec<f64>; 4],
     b: &[Vec<f64>; 3],
     weights: &[f64],
@@ -391,7 +448,7 @@ pub(super) fn signed_moments(
         mul_add(&mut acc[2], &sw[k], &e2[k]);
         mul_add(&mut acc[3], &sw[k], &e3[k]);
     }
-    let se = acc.map(total);
+    let se = totals(&acc);
     let mut acc = [[0.0; LANES]; 4];
     for k in 0..full / LANES {
         mul_add_sq(&mut acc[0], &w[k], &e1[k]);
@@ -401,7 +458,7 @@ pub(super) fn signed_moments(
             acc[3][j] += w[k][j];
         }
     }
-    let d2w = acc.map(total);
+    let d2w = totals(&acc);
     let mut acc = [[0.0; LANES]; 4];
     for k in 0..full / LANES {
         mul_add(&mut acc[0], &w[k], &bx[k]);
@@ -409,7 +466,7 @@ pub(super) fn signed_moments(
         mul_add(&mut acc[2], &w[k], &bz[k]);
         mul_add(&mut acc[3], &w[k], &w[k]);
     }
-    let bw = acc.map(total);
+    let bw = totals(&acc);
     let mut m = Moments {
         r: *r,
         se,
@@ -434,7 +491,8 @@ pub(super) fn signed_moments(
 }
 
 /// N_eff (eq. 46) of the weights `∝ exp(lw_i + α δ_i)`.
-pub(super) fn ess_with(lw: &[f64], delta: &[f64], alpha: f64, scratch: &mut Vec<f64>) -> f64 {
+#[inline(always)]
+fn ess_with_body(lw: &[f64], delta: &[f64], alpha: f64, scratch: &mut Vec<f64>) -> f64 {
     scratch.clear();
     scratch.extend(lw.iter().zip(delta).map(|(l, d)| l + alpha * d));
     let mut max = [f64::NEG_INFINITY; LANES];
@@ -467,4 +525,51 @@ pub(super) fn ess_with(lw: &[f64], delta: &[f64], alpha: f64, scratch: &mut Vec<
     }
     let (sum, sum_sq) = (total(sum), total(sum_sq));
     sum * sum / sum_sq
+}
+
+dispatch! {
+    /// (P3) for every particle in one pass; see [`likelihood_pass_body`].
+    pub(super) fn likelihood_pass(cloud: &mut Cloud, aid: &AidAbout, alpha: f64, out: PassOut<'_>) -> f64
+        = likelihood_pass_body;
+}
+dispatch! {
+    /// `lw_i ← lw_i + α δ_i`; returns the largest `lw_i`.
+    pub(super) fn add_log_likelihoods(lw: &mut [f64], delta: &[f64], alpha: f64) -> f64
+        = add_log_likelihoods_body;
+}
+dispatch! {
+    /// The weights and their moments; see [`weigh_body`].
+    pub(super) fn weigh(
+        cloud: &mut Cloud,
+        max: f64,
+        e: &[Vec<f64>; 4],
+        r: &[f64; 4],
+        weights: &mut [f64],
+        signed: &mut Vec<f64>,
+    ) -> Moments = weigh_body;
+}
+dispatch! {
+    /// The moments of the cloud; see [`moments_body`].
+    pub(super) fn moments(
+        e: &[Vec<f64>; 4],
+        b: &[Vec<f64>; 3],
+        weights: &[f64],
+        r: &[f64; 4],
+        signed: &mut Vec<f64>,
+    ) -> Moments = moments_body;
+}
+dispatch! {
+    /// [`moments`] with the signed weights given; see [`signed_moments_body`].
+    pub(super) fn signed_moments(
+        e: &[Vec<f64>; 4],
+        b: &[Vec<f64>; 3],
+        weights: &[f64],
+        signed: &[f64],
+        r: &[f64; 4],
+    ) -> Moments = signed_moments_body;
+}
+dispatch! {
+    /// N_eff (eq. 46) of the weights `∝ exp(lw_i + α δ_i)`.
+    pub(super) fn ess_with(lw: &[f64], delta: &[f64], alpha: f64, scratch: &mut Vec<f64>) -> f64
+        = ess_with_body;
 }

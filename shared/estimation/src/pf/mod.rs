@@ -190,7 +190,7 @@
 //!
 //! # Determinism
 //!
-//! Every random number comes from one generator seeded by `seed` (eight
+//! Every random number comes from one generator seeded by `seed` (64
 //! xoshiro128++ streams, normal draws by (N1) of [`noise`]), every loop runs
 //! in particle order, and sums are taken in a fixed order of partial sums:
 //! the same seed and inputs give the same output bit for bit. A restore
@@ -205,9 +205,13 @@
 //! vectorises it; no per-sample allocation. One likelihood pass computes
 //! each particle's error `E_i = q̂⁻ ⊗ q_i⁻¹` once and takes from it the tilt
 //! and heading differences (P3), the sign alignment and the spread.
+//! Each of these loops is compiled for the target, for AVX2 and for
+//! AVX-512F, and the form is chosen at run time by the CPU's features
+//! ([`isa`]); all give the same bits.
 
 mod aiding;
 mod cloud;
+mod isa;
 mod math;
 mod noise;
 mod params;
@@ -224,6 +228,7 @@ use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 use thiserror::Error;
 
 use cloud::{Cloud, Moments};
+use isa::Isa;
 use noise::Noise;
 
 use crate::attitude::{quat_from_rotation_vector, wrap_pi};
@@ -352,6 +357,8 @@ pub struct ParticleFilter {
     exponents: Vec<f64>,
     signed: Vec<f64>,
     rng: Noise,
+    /// The compiled form of the loops that runs (same bits either way).
+    isa: Isa,
     q_hat: UnitQuaternion<f64>,
     bias_hat: Vector3<f64>,
     /// Weighted spread of the attitude about the estimate, N, E, D, rad.
@@ -437,6 +444,7 @@ impl ParticleFilter {
             exponents: Vec::with_capacity(n),
             signed: Vec::with_capacity(n),
             rng: Noise::new(config.seed),
+            isa: Isa::detect(),
             q_hat: q_nb,
             bias_hat: Vector3::zeros(),
             spread: Vector3::zeros(),
@@ -497,7 +505,7 @@ impl ParticleFilter {
         }
         let n = self.particles.len();
         self.normals.resize(3 * n, 0.0);
-        self.rng.fill_normal(&mut self.normals, std_rad_s);
+        self.rng.fill_normal(self.isa, &mut self.normals, std_rad_s);
         for (k, (b, e)) in self
             .particles
             .b
@@ -528,7 +536,7 @@ impl ParticleFilter {
         let q0 = self.q_hat;
         let n = self.particles.len();
         self.normals.resize(3 * n, 0.0);
-        self.rng.fill_normal(&mut self.normals, 1.0);
+        self.rng.fill_normal(self.isa, &mut self.normals, 1.0);
         for i in 0..n {
             let e = Vector3::new(
                 self.normals[i] * tilt_std_rad,
@@ -540,6 +548,14 @@ impl ParticleFilter {
         }
         self.refresh_estimate();
         Ok(self)
+    }
+
+    /// The same filter running the loops' `isa` form (the test of
+    /// [`isa`]'s claim that every form gives the same bits).
+    #[cfg(test)]
+    fn with_isa(mut self, isa: Isa) -> Self {
+        self.isa = isa;
+        self
     }
 
     /// Sets the calibration bits reported in snapshots.
@@ -588,8 +604,15 @@ impl ParticleFilter {
     /// to third order, rad) and the bias (rad/s), 6×6.
     pub fn covariance(&self) -> Matrix6<f64> {
         let mut errors = Default::default();
-        self.particles.errors(&to_array(&self.q_hat), &mut errors);
-        resample::cloud_covariance(&self.particles, &errors, &self.weights, &self.bias_hat)
+        self.particles
+            .errors(self.isa, &to_array(&self.q_hat), &mut errors);
+        resample::cloud_covariance(
+            self.isa,
+            &self.particles,
+            &errors,
+            &self.weights,
+            &self.bias_hat,
+        )
     }
 
     /// Whether the rest detector currently holds the sensor still (P5).
@@ -604,7 +627,7 @@ impl ParticleFilter {
         let l = resample::cholesky_floor(cov);
         let n = self.particles.len();
         self.normals.resize(6 * n, 0.0);
-        self.rng.fill_normal(&mut self.normals, 1.0);
+        self.rng.fill_normal(self.isa, &mut self.normals, 1.0);
         let draws: Vec<Vector6<f64>> = (0..n)
             .map(|i| l * Vector6::from_fn(|k, _| self.normals[k * n + i]))
             .collect();
@@ -628,8 +651,9 @@ impl ParticleFilter {
     /// and the attitude spread.
     fn refresh_estimate(&mut self) {
         let r = to_array(&self.q_hat);
-        self.particles.errors(&r, &mut self.errors);
+        self.particles.errors(self.isa, &r, &mut self.errors);
         let m = cloud::moments(
+            self.isa,
             &self.errors,
             &self.particles.b,
             &self.weights,
@@ -681,12 +705,13 @@ impl ParticleFilter {
         if self.noise_steps >= PROCESS_NOISE_STRIDE {
             let sigma = self.config.gyro_noise_rad_rt_s * self.noise_s.sqrt();
             self.normals.resize(3 * n, 0.0);
-            self.rng.fill_normal(&mut self.normals, sigma);
-            self.particles.propagate::<true>(w, dt_s, &self.normals);
+            self.rng.fill_normal(self.isa, &mut self.normals, sigma);
+            self.particles
+                .propagate(self.isa, w, dt_s, Some(&self.normals));
             self.noise_steps = 0;
             self.noise_s = 0.0;
         } else {
-            self.particles.propagate::<false>(w, dt_s, &[]);
+            self.particles.propagate(self.isa, w, dt_s, None);
         }
         // The predicted estimate: the previous one moved by the mean rate (the
         // weighted mean of the moved particles to second order in their
@@ -701,14 +726,14 @@ impl ParticleFilter {
         self.bias_walk_s += dt_s;
         if self.bias_walk_steps >= BIAS_WALK_STRIDE {
             let nav = quat_from_rotation_vector(&self.nav_pending);
-            self.particles.rotate_nav(to_array(&nav));
+            self.particles.rotate_nav(self.isa, to_array(&nav));
             self.q_hat = UnitQuaternion::new_normalize((nav * self.q_hat).into_inner());
             self.nav_pending = Vector3::zeros();
             let s = self.config.gyro_bias_walk_rad_s_rt_s * self.bias_walk_s.sqrt();
             if s > 0.0 {
                 self.normals.resize(3 * n, 0.0);
-                self.rng.fill_normal(&mut self.normals, s);
-                self.particles.add_bias(&self.normals);
+                self.rng.fill_normal(self.isa, &mut self.normals, s);
+                self.particles.add_bias(self.isa, &self.normals);
             }
             self.bias_walk_steps = 0;
             self.bias_walk_s = 0.0;

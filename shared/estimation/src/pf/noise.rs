@@ -31,6 +31,8 @@
 //! 14 instructions, all of them SIMD over four streams (callgrind), where
 //! ChaCha8 and a ziggurat took a scalar branchy path per draw.
 
+use super::isa::{Isa, dispatch};
+
 /// Streams run side by side: enough for the compiler's loop vectoriser
 /// (with eight, its cost model left the rotations scalar on SSE2).
 const LANES: usize = 64;
@@ -55,7 +57,7 @@ fn splitmix64(state: &mut u64) -> u64 {
 }
 
 impl Noise {
-    /// Eight streams seeded from `seed`.
+    /// The streams seeded from `seed`.
     pub(super) fn new(seed: u64) -> Self {
         let mut sm = seed;
         let mut s = [[0u32; LANES]; 4];
@@ -93,21 +95,8 @@ impl Noise {
     }
 
     /// Fills `out` with `scale · z`, `z` the unit-variance draws of (N1).
-    pub(super) fn fill_normal(&mut self, out: &mut [f64], scale: f64) {
-        let k = scale * IRWIN_HALL_SCALE;
-        let (chunks, rest) = out.as_chunks_mut::<LANES>();
-        for chunk in chunks {
-            let r = self.next();
-            for l in 0..LANES {
-                chunk[l] = f64::from(byte_sum(r[l]) - 510) * k;
-            }
-        }
-        if !rest.is_empty() {
-            let r = self.next();
-            for (o, x) in rest.iter_mut().zip(r) {
-                *o = f64::from(byte_sum(x) - 510) * k;
-            }
-        }
+    pub(super) fn fill_normal(&mut self, isa: Isa, out: &mut [f64], scale: f64) {
+        fill_normal(isa, self, out, scale);
     }
 
     /// One uniform draw in [0, 1) with 53 random bits (two streams' words).
@@ -116,6 +105,29 @@ impl Noise {
         let bits = (u64::from(r[0]) << 21) ^ u64::from(r[1] >> 11);
         bits as f64 * (1.0 / (1u64 << 53) as f64)
     }
+}
+
+/// [`Noise::fill_normal`]'s loop.
+#[inline(always)]
+fn fill_normal_body(noise: &mut Noise, out: &mut [f64], scale: f64) {
+    let k = scale * IRWIN_HALL_SCALE;
+    let (chunks, rest) = out.as_chunks_mut::<LANES>();
+    for chunk in chunks {
+        let r = noise.next();
+        for l in 0..LANES {
+            chunk[l] = f64::from(byte_sum(r[l]) - 510) * k;
+        }
+    }
+    if !rest.is_empty() {
+        let r = noise.next();
+        for (o, x) in rest.iter_mut().zip(r) {
+            *o = f64::from(byte_sum(x) - 510) * k;
+        }
+    }
+}
+
+dispatch! {
+    fn fill_normal(noise: &mut Noise, out: &mut [f64], scale: f64) = fill_normal_body;
 }
 
 /// The sum of the four bytes of `x` (0..=1020), as an `i32`.
@@ -155,7 +167,7 @@ mod tests {
     fn normal_draws_have_unit_variance() {
         let mut n = Noise::new(42);
         let mut z = vec![0.0; 400_003];
-        n.fill_normal(&mut z, 2.0);
+        n.fill_normal(Isa::detect(), &mut z, 2.0);
         let m = z.iter().sum::<f64>() / z.len() as f64;
         let v = z.iter().map(|x| (x - m).powi(2)).sum::<f64>() / z.len() as f64;
         let k4 = z.iter().map(|x| (x - m).powi(4)).sum::<f64>() / z.len() as f64 / (v * v);
@@ -164,9 +176,9 @@ mod tests {
         assert!((k4 - 2.7).abs() < 0.02, "{k4}");
         assert!(z.iter().all(|x| x.abs() <= 2.0 * 3.47));
         let mut again = vec![0.0; z.len()];
-        Noise::new(42).fill_normal(&mut again, 2.0);
+        Noise::new(42).fill_normal(Isa::detect(), &mut again, 2.0);
         assert_eq!(z, again);
-        Noise::new(43).fill_normal(&mut again, 2.0);
+        Noise::new(43).fill_normal(Isa::detect(), &mut again, 2.0);
         assert_ne!(z, again);
         let u: Vec<f64> = (0..10_000).map(|_| n.uniform()).collect();
         assert!(u.iter().all(|x| (0.0..1.0).contains(x)));

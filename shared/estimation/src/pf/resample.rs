@@ -3,6 +3,7 @@
 use nalgebra::{Matrix6, Vector3, Vector6};
 
 use super::cloud::{Cloud, LANES, total};
+use super::isa::{Isa, dispatch};
 use super::math::qmul;
 use super::noise::Noise;
 
@@ -26,9 +27,20 @@ fn chart(e: &[Vec<f64>; 4], cloud: &Cloud, b_hat: &Vector3<f64>, i: usize) -> [f
     ]
 }
 
-/// Weighted sample covariance of `[δθ_i; b_i − b̂]` (6×6, symmetric), the
-/// attitude error in the chart of (P6), from the errors `e` about `q̂`.
-pub(super) fn cloud_covariance(
+dispatch! {
+    /// Weighted sample covariance of `[δθ_i; b_i − b̂]` (6×6, symmetric), the
+    /// attitude error in the chart of (P6), from the errors `e` about `q̂`.
+    pub(super) fn cloud_covariance(
+        cloud: &Cloud,
+        e: &[Vec<f64>; 4],
+        weights: &[f64],
+        b_hat: &Vector3<f64>,
+    ) -> Matrix6<f64> = cloud_covariance_body;
+}
+
+/// [`cloud_covariance`]'s loop.
+#[inline(always)]
+fn cloud_covariance_body(
     cloud: &Cloud,
     e: &[Vec<f64>; 4],
     weights: &[f64],
@@ -129,7 +141,9 @@ pub(super) fn residual(weights: &[f64], parents: &mut Vec<u32>, rng: &mut Noise)
 /// Gaussian kernel's optimal bandwidth for d = 6, `a = √(1 − h²)`; `L` the
 /// Cholesky factor of the cloud's covariance before resampling. `errors` and
 /// `normals` are scratch.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn regularise(
+    isa: Isa,
     cloud: &mut Cloud,
     q_hat: &[f64; 4],
     b_hat: &Vector3<f64>,
@@ -143,8 +157,35 @@ pub(super) fn regularise(
     let d = 6.0;
     let h = (4.0 / (nf * (d + 2.0))).powf(1.0 / (d + 4.0));
     let a = (1.0 - h * h).sqrt();
-    cloud.errors(q_hat, errors);
-    // The cloud's mean after selection, to shrink towards.
+    cloud.errors(isa, q_hat, errors);
+    normals.resize(6 * n, 0.0);
+    rng.fill_normal(isa, normals, h);
+    let kernel = Kernel { q_hat, b_hat, l, a };
+    spread(isa, cloud, &kernel, errors, normals);
+}
+
+/// The kernel of [`regularise`]: about `q_hat` and `b_hat`, shrinkage `a`,
+/// the covariance's Cholesky factor `l`.
+#[derive(Debug)]
+struct Kernel<'a> {
+    q_hat: &'a [f64; 4],
+    b_hat: &'a Vector3<f64>,
+    l: &'a Matrix6<f64>,
+    a: f64,
+}
+
+dispatch! {
+    fn spread(cloud: &mut Cloud, k: &Kernel<'_>, errors: &[Vec<f64>; 4], normals: &[f64]) = spread_body;
+}
+
+/// [`regularise`]'s loops: the cloud's mean after selection, to shrink
+/// towards, then each particle moved, with the kernel draws `normals` (`6n`,
+/// `h` already in them).
+#[inline(always)]
+fn spread_body(cloud: &mut Cloud, k: &Kernel<'_>, errors: &[Vec<f64>; 4], normals: &[f64]) {
+    let Kernel { q_hat, b_hat, l, a } = *k;
+    let n = cloud.len();
+    let nf = n as f64;
     let mut lanes = [[0.0; LANES]; 6];
     for i in 0..n {
         let x = chart(errors, cloud, b_hat, i);
@@ -153,8 +194,6 @@ pub(super) fn regularise(
         }
     }
     let mean = lanes.map(|l| total(l) / nf);
-    normals.resize(6 * n, 0.0);
-    rng.fill_normal(normals, h);
     let l = l.as_slice();
     // Column-major: L[(r, c)] is l[r + 6 c].
     for i in 0..n {

@@ -167,7 +167,7 @@ fn parameters_default_refuse_unknown_keys_and_bad_values() {
         MapDeserializer::new([("resample_threshold", 0.3)].into_iter());
     let p = PfParams::deserialize(d).expect("known key");
     assert_eq!(p.resample_threshold, 0.3);
-    assert_eq!(p.particles, 1000);
+    assert_eq!(p.particles, 700);
     let d: MapDeserializer<_, ValueError> =
         MapDeserializer::new([("resample_treshold", 0.3)].into_iter());
     assert!(PfParams::deserialize(d).is_err());
@@ -393,6 +393,67 @@ fn same_seed_same_output_bit_for_bit() {
     assert_eq!(a, b);
     let c = run(43, 3000);
     assert_ne!(a, c);
+}
+
+/// Rocking for 20 s, then still (the rest update of the biases, P5).
+fn rocking_then_still(t: f64) -> Vector3<f64> {
+    if t < 20.0 { rocking(t) } else { still(t) }
+}
+
+/// The loops compiled for AVX-512 and AVX2 (those this CPU has; the others
+/// fall back to the next narrower form) and for the baseline give the same
+/// filter bit for bit, through every path: tempering from the initial
+/// spread (P7), resampling (P6), the rest update (P5), prediction with and
+/// without its noise draws (P1).
+#[test]
+fn avx2_and_baseline_give_the_same_bits() {
+    #[cfg(target_arch = "x86_64")]
+    eprintln!(
+        "this CPU has AVX2: {}, AVX-512F: {}",
+        std::arch::is_x86_feature_detected!("avx2"),
+        std::arch::is_x86_feature_detected!("avx512f")
+    );
+    let c = config(&PfParams {
+        particles: 203,
+        ..small()
+    });
+    let truth0 = from_euler(0.2, -0.3, 1.9);
+    let start = from_euler(0.25, -0.25, 2.1);
+    let make = |isa| {
+        ParticleFilter::new(&c, start, LAT, DECLINATION, reference())
+            .expect("valid")
+            .with_isa(isa)
+    };
+    let mut base = make(Isa::baseline());
+    let mut wide = [make(Isa::detect()), make(Isa::avx2_at_most())];
+    let mut synth = Synth::new(
+        truth0,
+        Vector3::new(2e-3, -1e-3, 1e-3),
+        11,
+        rocking_then_still,
+    );
+    for k in 0..3000 {
+        let s = synth.step();
+        step(&mut base, &s);
+        let b = base.estimate();
+        for f in &mut wide {
+            step(f, &s);
+            assert_eq!(f.particles, base.particles, "sample {k}");
+            assert_eq!(f.weights, base.weights, "sample {k}");
+            let a = f.estimate();
+            assert_eq!(a.q_nb.to_wxyz(), b.q_nb.to_wxyz(), "sample {k}");
+            assert_eq!(a.std_rad, b.std_rad, "sample {k}");
+            assert_eq!(a.gyro_bias, b.gyro_bias, "sample {k}");
+        }
+    }
+    let stats = base.stats();
+    for f in &wide {
+        assert_eq!(f.covariance(), base.covariance());
+        assert_eq!(f.stats(), stats);
+    }
+    assert!(stats.tempering_stages > 0, "{stats:?}");
+    assert!(stats.resamples > 0, "{stats:?}");
+    assert!(stats.rest_samples > 0, "{stats:?}");
 }
 
 /// The snapshot's covariance is the particles' weighted sample covariance

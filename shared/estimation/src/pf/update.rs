@@ -2,6 +2,7 @@
 //! each particle, tempering when the weights would collapse, the rest-time
 //! bias update, and selection-and-replacement resampling.
 
+use super::isa::dispatch;
 use super::*;
 
 /// What one aiding pair says (P3): the factors' precisions `1/(2 s²)` (0:
@@ -159,6 +160,7 @@ impl ParticleFilter {
                 m: qmul_inv(&aid.q_mag, &r),
             };
             let max = cloud::likelihood_pass(
+                self.isa,
                 &mut self.particles,
                 &about,
                 remaining,
@@ -186,7 +188,14 @@ impl ParticleFilter {
             let (mut lo, mut hi) = (0.0, remaining);
             for _ in 0..BISECTION_STEPS {
                 let mid = 0.5 * (lo + hi);
-                if cloud::ess_with(&self.particles.lw, &delta, mid, &mut self.exponents) >= n_th {
+                if cloud::ess_with(
+                    self.isa,
+                    &self.particles.lw,
+                    &delta,
+                    mid,
+                    &mut self.exponents,
+                ) >= n_th
+                {
                     lo = mid;
                 } else {
                     hi = mid;
@@ -214,42 +223,19 @@ impl ParticleFilter {
     /// cloud; unlike a reweighting it cannot run out of particles near `z`.
     pub(super) fn rest_bias_update(&mut self, z: &Vector3<f64>) {
         let r = self.rest.gyro_var.max(REST_VARIANCE_FLOOR);
-        let mut var = [0.0; 3];
-        for (k, v) in var.iter_mut().enumerate() {
-            let b_hat = self.bias_hat[k];
-            let mut lanes = [0.0; cloud::LANES];
-            let mut chunks = self.particles.b[k].chunks_exact(cloud::LANES);
-            let mut w_chunks = self.weights.chunks_exact(cloud::LANES);
-            for (b, w) in (&mut chunks).zip(&mut w_chunks) {
-                for j in 0..cloud::LANES {
-                    let d = b[j] - b_hat;
-                    lanes[j] += w[j] * d * d;
-                }
-            }
-            for (b, w) in chunks.remainder().iter().zip(w_chunks.remainder()) {
-                let d = b - b_hat;
-                lanes[0] += w * d * d;
-            }
-            *v = cloud::total(lanes);
-        }
+        let b_hat: [f64; 3] = self.bias_hat.into();
+        let var = bias_variance(self.isa, &self.particles.b, &self.weights, b_hat);
         let mut shift = [0.0; 3];
         let mut scale = [1.0; 3];
         for (k, (sh, sc)) in shift.iter_mut().zip(scale.iter_mut()).enumerate() {
             let gain = var[k] / (var[k] + r);
-            *sh = gain * (z[k] - self.bias_hat[k]);
+            *sh = gain * (z[k] - b_hat[k]);
             *sc = (1.0 - gain).sqrt();
         }
         if !(shift.iter().chain(&scale).all(|v| v.is_finite())) {
             return;
         }
-        let b_hat = self.bias_hat;
-        for (k, b) in self.particles.b.iter_mut().enumerate() {
-            let (c, sc) = (b_hat[k], scale[k]);
-            let sh = c + shift[k];
-            for b in b.iter_mut() {
-                *b = sh + sc * (*b - c);
-            }
-        }
+        shift_biases(self.isa, &mut self.particles.b, b_hat, shift, scale);
         self.bias_hat += Vector3::from(shift);
     }
 
@@ -272,6 +258,7 @@ impl ParticleFilter {
             return self.apply_log_likelihoods(delta, 0.0, r);
         }
         let m = cloud::signed_moments(
+            self.isa,
             &self.errors,
             &self.particles.b,
             &self.weights,
@@ -286,10 +273,13 @@ impl ParticleFilter {
     /// `Σ w_i²` of the normalised weights.
     fn normalise(&mut self, m: &Moments, shift: f64) -> f64 {
         let inv = 1.0 / m.w;
-        for (l, w) in self.particles.lw.iter_mut().zip(self.weights.iter_mut()) {
-            *l -= shift;
-            *w *= inv;
-        }
+        normalise_weights(
+            self.isa,
+            &mut self.particles.lw,
+            &mut self.weights,
+            shift,
+            inv,
+        );
         self.finish_moments(m);
         m.w2 * inv * inv
     }
@@ -298,7 +288,7 @@ impl ParticleFilter {
     /// the weights and takes the estimate in the same pass, with the errors
     /// in `self.errors` taken about `r`; returns `Σ w_i²`.
     pub(super) fn apply_log_likelihoods(&mut self, delta: &[f64], alpha: f64, r: &[f64; 4]) -> f64 {
-        let max_lw = cloud::add_log_likelihoods(&mut self.particles.lw, delta, alpha);
+        let max_lw = cloud::add_log_likelihoods(self.isa, &mut self.particles.lw, delta, alpha);
         if !max_lw.is_finite() {
             // Cannot happen with finite inputs; keep the previous weights.
             for (l, w) in self.particles.lw.iter_mut().zip(&self.weights) {
@@ -307,6 +297,7 @@ impl ParticleFilter {
             return self.weights.iter().map(|w| w * w).sum();
         }
         let m = cloud::weigh(
+            self.isa,
             &mut self.particles,
             max_lw,
             &self.errors,
@@ -320,8 +311,9 @@ impl ParticleFilter {
     /// (P6): residual resampling, then the shrinkage kernel; equal weights.
     pub(super) fn resample(&mut self) {
         let r = to_array(&self.q_hat);
-        self.particles.errors(&r, &mut self.errors);
+        self.particles.errors(self.isa, &r, &mut self.errors);
         let cov = resample::cloud_covariance(
+            self.isa,
             &self.particles,
             &self.errors,
             &self.weights,
@@ -333,6 +325,7 @@ impl ParticleFilter {
         std::mem::swap(&mut self.particles, &mut self.scratch);
         self.particles.lw.iter_mut().for_each(|l| *l = 0.0);
         resample::regularise(
+            self.isa,
             &mut self.particles,
             &r,
             &self.bias_hat,
@@ -345,5 +338,67 @@ impl ParticleFilter {
         self.weights.iter_mut().for_each(|w| *w = 1.0 / n);
         self.refresh_estimate();
         self.stats.resamples += 1;
+    }
+}
+
+dispatch! {
+    /// `Σ w_i (b_i − b̂)²` per axis (P5).
+    fn bias_variance(b: &[Vec<f64>; 3], weights: &[f64], b_hat: [f64; 3]) -> [f64; 3]
+        = bias_variance_body;
+}
+
+/// [`bias_variance`]'s loops.
+#[inline(always)]
+fn bias_variance_body(b: &[Vec<f64>; 3], weights: &[f64], b_hat: [f64; 3]) -> [f64; 3] {
+    let mut var = [0.0; 3];
+    for (k, v) in var.iter_mut().enumerate() {
+        let mut lanes = [0.0; cloud::LANES];
+        let mut chunks = b[k].chunks_exact(cloud::LANES);
+        let mut w_chunks = weights.chunks_exact(cloud::LANES);
+        for (b, w) in (&mut chunks).zip(&mut w_chunks) {
+            for j in 0..cloud::LANES {
+                let d = b[j] - b_hat[k];
+                lanes[j] += w[j] * d * d;
+            }
+        }
+        for (b, w) in chunks.remainder().iter().zip(w_chunks.remainder()) {
+            let d = b - b_hat[k];
+            lanes[0] += w * d * d;
+        }
+        *v = cloud::total(lanes);
+    }
+    var
+}
+
+dispatch! {
+    /// (P5) on the cloud: `b_i ← b̂ + shift + scale (b_i − b̂)` per axis.
+    fn shift_biases(b: &mut [Vec<f64>; 3], b_hat: [f64; 3], shift: [f64; 3], scale: [f64; 3])
+        = shift_biases_body;
+}
+
+/// [`shift_biases`]'s loop.
+#[inline(always)]
+fn shift_biases_body(b: &mut [Vec<f64>; 3], b_hat: [f64; 3], shift: [f64; 3], scale: [f64; 3]) {
+    for (k, b) in b.iter_mut().enumerate() {
+        let (c, sc) = (b_hat[k], scale[k]);
+        let sh = c + shift[k];
+        for b in b.iter_mut() {
+            *b = sh + sc * (*b - c);
+        }
+    }
+}
+
+dispatch! {
+    /// `lw_i ← lw_i − shift`, `w_i ← w_i · inv`.
+    fn normalise_weights(lw: &mut [f64], weights: &mut [f64], shift: f64, inv: f64)
+        = normalise_weights_body;
+}
+
+/// [`normalise_weights`]'s loop.
+#[inline(always)]
+fn normalise_weights_body(lw: &mut [f64], weights: &mut [f64], shift: f64, inv: f64) {
+    for (l, w) in lw.iter_mut().zip(weights.iter_mut()) {
+        *l -= shift;
+        *w *= inv;
     }
 }
