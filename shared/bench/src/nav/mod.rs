@@ -502,6 +502,11 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
         survey.scenario == ScenarioKind::Survey,
         "the default scenario is not the survey"
     );
+    // A-KIT first: it takes seconds, and a wrong directory fails at once.
+    let akit = match &args.akit {
+        Some(dir) => Value::Object(akit::akit_trajectories(dir, progress)?),
+        None => Value::Null,
+    };
     // Every variant on the same survey data, the shipped attitude PF
     // feeding `attitude/estimate`; its speed at its shipped particle count
     // is the attitude figure. No positioning process exists yet, so the run
@@ -538,10 +543,6 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
     let mut dr = dr_manoeuvres(args.quick, progress)?;
     filters_on_manoeuvres(&mut dr, args.quick, progress)?;
     let spikes = spikes(args.quick, progress)?;
-    let akit = match &args.akit {
-        Some(dir) => Value::Object(akit::akit_trajectories(dir, progress)?),
-        None => Value::Null,
-    };
     let result = json!({
         "survey": {
             "aided": survey_eval,
