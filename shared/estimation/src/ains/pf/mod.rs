@@ -413,10 +413,15 @@ impl ParticleAins {
     fn position_update(&mut self, axes: &[usize], z: &[f64], sigma: &[f64], kind: usize) -> bool {
         let c = self.config;
         let (var, mean) = (self.pos.var(), self.pos.mean());
-        let nu: Vec<f64> = axes.iter().zip(z).map(|(&i, z)| z - mean[i]).collect();
-        let pv: Vec<f64> = axes.iter().map(|&i| var[i]).collect();
-        let mv: Vec<f64> = sigma.iter().map(|s| s * s).collect();
-        let d2 = normalised_innovation(&nu, &pv, &mv);
+        // On the stack: at most three axes (no allocation per sample).
+        let n = axes.len().min(3);
+        let (mut nu, mut pv, mut mv) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+        for k in 0..n {
+            nu[k] = z[k] - mean[axes[k]];
+            pv[k] = var[axes[k]];
+            mv[k] = sigma[k] * sigma[k];
+        }
+        let d2 = normalised_innovation(&nu[..n], &pv[..n], &mv[..n]);
         let (stats, limit) = match kind {
             GPS => (&mut self.stats.gps, c.position_gate),
             FIX => (&mut self.stats.fix, c.position_gate),
