@@ -88,17 +88,17 @@
 //! the surface, no position aiding, seed 7, the attitude input from paper
 //! 000's attitude PF run in-process, magnetometer without hard and soft
 //! iron; `cargo test --release -p nauta-estimation --test ains_pf survey --
-//! --nocapture`, 2026-12-02): drift while submerged 0.32 / 0.66 / 0.00 m/km
-//! N/E/D (final error over distance; least-squares slopes 0.22 / 0.83 /
+//! --nocapture`, 2026-12-02): drift while submerged 0.35 / 0.64 / 0.00 m/km
+//! N/E/D (final error over distance; least-squares slopes 0.00 / 0.76 /
 //! 0.00 m/km; paper 000's DVL-aided INS: 23.8 / 29 / 32.8 m/km), velocity
-//! RMS 0.0094 / 0.0074 / 0.0068 m/s (paper: 0.014 / 0.016 / 0.016; 0.022 /
+//! RMS 0.0074 / 0.0074 / 0.0067 m/s (paper: 0.014 / 0.016 / 0.016; 0.022 /
 //! 0.020 / 0.007 with the attitude input used as it came, before the
 //! carried attitude), truth inside the published 95 % horizontal region
-//! 93.7 % of the time, about 6.6 µs per IMU sample with 128 particles per
-//! filter on a shared, loaded two-core machine. With the attitude role's
-//! `mekf` as the input: 0.29 / 0.70 / 0.00 m/km, 0.0070 / 0.0074 / 0.0070
-//! m/s, 100 % (its attitude is better than the one the position σ's model
-//! is set for).
+//! 99.9 % of the time (the target's 90-98 %: one dive's error, mostly
+//! inside or mostly outside), about 4-7 µs per IMU sample with 128
+//! particles per filter on a shared, loaded two-core machine. With the
+//! attitude role's `mekf` as the input: 0.24 / 0.76 / 0.00 m/km, 0.0070 /
+//! 0.0074 / 0.0070 m/s, 100 %.
 //!
 //! **Bad input** ([`EstimatorError`], state kept): a stamp before the last
 //! one, an IMU sample the strapdown refuses (interval outside (0, 1] s,
