@@ -61,6 +61,70 @@ impl Stamped for Nav {
     }
 }
 
+/// Time constant of the low-pass of [`Manoeuvre`]'s acceleration, s: it
+/// removes the gyro's noise (6e-4 rad of tilt angle per 100 Hz sample at
+/// 1.5 m/s, 8e-5 after it) and follows a turn's onset within a second.
+pub const MANOEUVRE_SMOOTHING_S: f64 = 0.5;
+
+/// The `pf` and `ekf` variants' measure of a manoeuvre, for their
+/// attitude input's error model: the centripetal acceleration `ω × v`
+/// (body frame) low-passed over [`MANOEUVRE_SMOOTHING_S`], and the squared
+/// tilt angle `m = |ω × v|² / g²` it gives an accelerometer-levelled
+/// attitude, held at its peak and falling over the given time (the
+/// input's error outlasts the manoeuvre).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct Manoeuvre {
+    /// The low-passed `ω × v`, FRD, m/s².
+    pub accel_m_s2: [f64; 3],
+    /// `m`, rad².
+    pub tilt_sq_rad2: f64,
+}
+
+impl Manoeuvre {
+    /// One IMU sample of `dt` s: body rate `w` (bias-corrected), rad/s,
+    /// body velocity `v_b`, m/s, gravity `g`, m/s²; `m` falls with the time
+    /// constant `fall_s`.
+    pub fn update(
+        &mut self,
+        w: &nalgebra::Vector3<f64>,
+        v_b: &nalgebra::Vector3<f64>,
+        g: f64,
+        dt: f64,
+        fall_s: f64,
+    ) {
+        let a = w.cross(v_b);
+        let alpha = -(-dt / MANOEUVRE_SMOOTHING_S).exp_m1();
+        for (s, x) in self.accel_m_s2.iter_mut().zip(a.iter()) {
+            *s += alpha * (x - *s);
+        }
+        let lp = nalgebra::Vector3::from(self.accel_m_s2);
+        let now = lp.norm_squared() / (g * g);
+        self.tilt_sq_rad2 = now.max(self.tilt_sq_rad2 * (-dt / fall_s).exp());
+    }
+
+    /// Whether every number is finite and `m` not negative (a snapshot's
+    /// check).
+    pub fn is_valid(&self) -> bool {
+        self.accel_m_s2.iter().all(|x| x.is_finite())
+            && self.tilt_sq_rad2.is_finite()
+            && self.tilt_sq_rad2 >= 0.0
+    }
+}
+
+/// The variance an attitude (or heading) input errs by in a manoeuvre, for
+/// one input used `spacing_s` after the previous one, rad²: `k² m` (`k` the
+/// manoeuvre factor, `m` the squared tilt angle of [`Manoeuvre`]) times the number of inputs used within the
+/// error's correlation time `time_s` (the low-pass's fall time), at least
+/// one. The error is a bias over the manoeuvre, not white noise: `N` inputs
+/// of one common error `e`, each taken as independent of variance `R`,
+/// weigh as one of variance `R / N`, so each is given `N R` (the usual
+/// inflation of time-correlated measurement noise; Groves 2013 ch. 3, the
+/// Kalman filter's assumptions, equation numbers not checkable here).
+pub fn manoeuvre_var(k: f64, m: f64, time_s: f64, spacing_s: Option<f64>) -> f64 {
+    let n = spacing_s.map_or(1.0, |dt| time_s / dt.max(1e-3)).max(1.0);
+    k * k * m * n
+}
+
 /// The bits of [`Nav::aiding_mode`] (`NavSolution.aiding_mode` on the wire):
 /// which aiding the solution used within its staleness window. No bit set is
 /// free inertial (or, for `dr`, dead reckoning on the last velocity).

@@ -31,7 +31,6 @@ pub fn calibrated_magnetometer() -> MagnetometerParams {
 
 /// The attitude role's `pf` (default, `alignment_samples = 400` as the
 /// shipped manifests) with the calibrated magnetometer.
-#[allow(dead_code)] // the example's `pf` heading
 pub fn attitude_pf() -> Heading {
     Heading::Attitude(Box::new(VariantParams::Pf(PfVariantParams {
         alignment_samples: 400,

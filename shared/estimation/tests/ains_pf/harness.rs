@@ -52,26 +52,28 @@ pub fn site(g: &Generator) -> Site {
     }
 }
 
-/// The attitude role's estimator at the site (400 alignment samples, as the
-/// shipped manifests): the `mekf` variant, or paper 000's attitude PF with
-/// `NAUTA_PF_ATTITUDE=pf`. The MEKF is the default because with the
-/// attitude PF's errors in the survey's turns (0.2° RMS over the survey,
-/// seed 7) the velocity RMS misses the target with the default parameters
-/// (0.0217 / 0.0201 / 0.0068 m/s; 0.0106 / 0.0085 / 0.0078 with
-/// `accel_bias_time_s = 10`, and the depth then leaves its 3σ in the warm
-/// restart test); see `AinsPfParams::accel_bias_time_s`.
-pub fn attitude_core(g: &Generator) -> AttitudeCore {
+/// Which of the attitude role's estimators feeds `attitude/estimate`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AttitudeInput {
+    /// Paper 000's attitude PF, the shipped survey's (`launch/survey.toml`).
+    Pf,
+    /// The `mekf` variant.
+    Mekf,
+}
+
+/// The attitude role's estimator of `input` at the site (400 alignment
+/// samples, as the shipped manifests).
+pub fn attitude_core(g: &Generator, input: AttitudeInput) -> AttitudeCore {
     let s = site(g);
-    let p = if std::env::var("NAUTA_PF_ATTITUDE").as_deref() == Ok("pf") {
-        VariantParams::Pf(PfVariantParams {
+    let p = match input {
+        AttitudeInput::Pf => VariantParams::Pf(PfVariantParams {
             alignment_samples: 400,
             ..Default::default()
-        })
-    } else {
-        VariantParams::Mekf(MekfVariantParams {
+        }),
+        AttitudeInput::Mekf => VariantParams::Mekf(MekfVariantParams {
             alignment_samples: 400,
             ..Default::default()
-        })
+        }),
     };
     AttitudeCore::new(&p, s.lat_rad, s.declination_rad).expect("valid")
 }
@@ -305,11 +307,16 @@ impl Tracker {
     }
 }
 
-/// Every input of the survey for `duration_s` with `seed`, with its step's
-/// truth.
-pub fn drive(seed: u64, duration_s: f64, mut f: impl FnMut(&AinsInput, &TruthReading)) -> Site {
+/// Every input of the survey for `duration_s` with `seed`, the attitude
+/// from `input`, with its step's truth.
+pub fn drive(
+    seed: u64,
+    duration_s: f64,
+    input: AttitudeInput,
+    mut f: impl FnMut(&AinsInput, &TruthReading),
+) -> Site {
     let mut g = survey(seed, duration_s);
-    let mut att = attitude_core(&g);
+    let mut att = attitude_core(&g, input);
     let s = site(&g);
     let mut buf = Vec::new();
     while let Some(m) = g.step() {
@@ -323,15 +330,20 @@ pub fn drive(seed: u64, duration_s: f64, mut f: impl FnMut(&AinsInput, &TruthRea
     s
 }
 
-/// Runs the survey for `duration_s` with `seed` through one estimator per
-/// entry of `params`.
-pub fn run_survey(seed: u64, duration_s: f64, params: &[AinsPfParams]) -> Vec<Score> {
+/// Runs the survey for `duration_s` with `seed`, the attitude from `input`,
+/// through one estimator per entry of `params`.
+pub fn run_survey(
+    seed: u64,
+    duration_s: f64,
+    input: AttitudeInput,
+    params: &[AinsPfParams],
+) -> Vec<Score> {
     let g = survey(seed, 1.0);
     let mut runs: Vec<Tracker> = params
         .iter()
         .map(|p| Tracker::new(ParticleAins::new(p, site(&g)).expect("valid")))
         .collect();
-    drive(seed, duration_s, |i, t| {
+    drive(seed, duration_s, input, |i, t| {
         for r in &mut runs {
             if let AinsInput::Attitude(a) = i {
                 r.score.attitude.push(a, t);

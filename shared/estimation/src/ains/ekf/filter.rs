@@ -35,6 +35,9 @@ pub struct Filter {
     pub dev: [f64; 2],
     /// Last bias-corrected angular rate, FRD, rad/s.
     pub omega_b: Vector3<f64>,
+    /// The manoeuvre: what an accelerometer-levelled heading source errs by
+    /// in a turn (`EkfParams::heading_manoeuvre_factor`).
+    pub manoeuvre: crate::ains::Manoeuvre,
     /// Error covariance.
     pub p: Cov,
     /// Covariance block accumulated since the last propagation.
@@ -98,6 +101,12 @@ impl Filter {
         )?;
         self.nav = step.state;
         self.omega_b = w;
+        // The manoeuvre (centripetal acceleration, body frame, the body's
+        // velocity from the estimate) for the heading source's error model.
+        let v_b = self.c_nb().transpose() * self.nav.v_ned_m_s.to_nalgebra();
+        let g = normal_gravity(self.nav.lat_rad, self.nav.height_m);
+        self.manoeuvre
+            .update(&w, &v_b, g, m.interval_s, cfg.heading_manoeuvre_time_s);
         let c = 0.5 * (c_before + self.c_nb());
         let v = self.nav.v_ned_m_s.to_nalgebra();
         let w_in = earth_rate_ned(self.nav.lat_rad)
@@ -169,6 +178,7 @@ impl Filter {
             heading_bias_rad: self.bh,
             heading_deviation_rad: self.dev,
             omega_b_rad_s: self.omega_b.into(),
+            manoeuvre: self.manoeuvre,
             p_upper: upper(&self.p),
             block: self.block,
         }
@@ -200,6 +210,7 @@ impl Filter {
             bh: s.heading_bias_rad,
             dev: s.heading_deviation_rad,
             omega_b: s.omega_b_rad_s.into(),
+            manoeuvre: s.manoeuvre,
             p,
             block: s.block,
         })

@@ -153,6 +153,7 @@ mod tests {
             bh: 0.01,
             dev: [0.002, -0.003],
             omega_b: w,
+            manoeuvre: Default::default(),
             p: Cov::identity(),
             block: Default::default(),
         }

@@ -17,7 +17,11 @@
 //!   receiver gives one), `positioning/fix` when `position_aiding`, and
 //!   heading: the attitude estimate's yaw while one came within
 //!   `aiding_timeout_s`, else the AHRS's magnetic heading plus the site's
-//!   declination, at most once per `heading_interval_s`. Each passes a
+//!   declination, at most once per `heading_interval_s`, its σ the
+//!   source's and what an accelerometer-levelled heading errs by in a
+//!   turn (`heading_manoeuvre_factor`, [`crate::ains::Manoeuvre`]: the
+//!   attitude PF's 1° in the survey's turns, against its published 0.14°,
+//!   had pulled the yaw and its bias state off for the legs after). Each passes a
 //!   normalised-innovation (χ²) gate; rejections are counted per kind
 //!   ([`EkfStats`]); after `max_consecutive_rejections` in a row the next
 //!   measurement of that kind re-anchors (that part of the state is set to
@@ -44,13 +48,16 @@
 //! [−1, 1], an AHRS or attitude that is not finite.
 //!
 //! **Measured** (the simulator's survey, 3837 m submerged, no
-//! `positioning/fix`, heading from the attitude role's `mekf` with the
-//! calibrated magnetometer, 2026-12-02):
-//! - seed 7: end-of-dive drift N/E/D 0.20/0.25/0.00 m/km, least-squares
-//!   slope 0.10/−0.36/0.00 m/km, velocity RMS 0.0059/0.0069/0.0021 m/s,
-//!   truth inside the 95 % region 100 % of the time
+//! `positioning/fix`, the calibrated magnetometer, 2026-12-02):
+//! - seed 7, heading from the shipped attitude PF: end-of-dive drift N/E/D
+//!   0.22/0.29/0.00 m/km, least-squares slope 0.09/−0.47/0.00 m/km,
+//!   velocity RMS 0.0060/0.0069/0.0021 m/s, truth inside the 95 % region
+//!   100 % of the time (without the manoeuvre term 0.0087/0.0156/0.0022
+//!   m/s and 54 % in `nauta bench nav`); from the `mekf`: 0.17/0.22/0.00
+//!   m/km, slope 0.14/−0.39/0.00, 0.0060/0.0069/0.0021 m/s, 100 %
 //!   (`cargo test --release -p nauta-estimation --test ains_ekf -- --nocapture`);
-//! - seeds 100-109: drift ≤ 4.8 m/km on every axis and seed (east, the
+//! - before the manoeuvre term (commit 614e753), `mekf` heading, seeds
+//!   100-109 (not measured again since): drift ≤ 4.8 m/km on every axis and seed (east, the
 //!   worst, 0.2-4.8), velocity RMS ≤ 0.010 m/s on 9 of 10 (seed 100: east
 //!   0.0103), inside the 95 % region 90.3 % of the submerged time over the
 //!   ten (per seed 100 % on eight, 69 % and 34 % on 100 and 103, whose
@@ -263,6 +270,7 @@ impl Ekf {
             bh: 0.0,
             dev: [0.0; 2],
             omega_b: Vector3::zeros(),
+            manoeuvre: Default::default(),
             p,
             block: Default::default(),
         });
@@ -520,6 +528,7 @@ impl Ekf {
         {
             return;
         }
+        let previous = self.stamps.heading_tried;
         self.stamps.heading_tried = Some(t);
         let bh_var = self.bh_std(source).powi(2);
         let dev_var = self.config.heading_deviation_std.powi(2);
@@ -534,10 +543,19 @@ impl Ekf {
             }
             self.heading_source = source;
         }
-        let m = self
-            .filter
-            .as_ref()
-            .and_then(|f| measurements::heading(f, z, std));
+        // The source's white σ and its error in a manoeuvre
+        // (`heading_manoeuvre_factor`, [`crate::ains::manoeuvre_var`]), in
+        // quadrature.
+        let (k, time_s) = (
+            self.config.heading_manoeuvre_factor,
+            self.config.heading_manoeuvre_time_s,
+        );
+        let spacing = previous.map(|l| t.saturating_sub(l) as f64 * 1e-9);
+        let m = self.filter.as_ref().and_then(|f| {
+            let r = std * std
+                + crate::ains::manoeuvre_var(k, f.manoeuvre.tilt_sq_rad2, time_s, spacing);
+            measurements::heading(f, z, r.sqrt())
+        });
         self.flush();
         if self.aid(Kind::Heading, m, |f, m| {
             let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), m.nu[0])

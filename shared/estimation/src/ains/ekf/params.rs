@@ -65,6 +65,28 @@ pub struct EkfParams {
     /// Smallest white noise σ of the attitude estimate's yaw, rad (its
     /// published σ is used when larger). Default 0.0017 (0.1°).
     pub attitude_heading_std_floor_rad: f64,
+    /// The heading source's error in a manoeuvre, rad of heading per rad
+    /// of the manoeuvre's tilt angle `|ω × v| / g` (held and falling over
+    /// `heading_manoeuvre_time_s`), added in quadrature to the white σ,
+    /// times the headings used within that time (the error is one bias
+    /// over the manoeuvre, [`crate::ains::manoeuvre_var`]). An
+    /// attitude filter or AHRS that takes the accelerometer for gravity
+    /// tilts by about that angle in a turn (the centripetal acceleration),
+    /// and its magnetic heading, tilt-compensated with the wrong tilt,
+    /// errs by about `tan(inclination)` times that; the error outlasts the
+    /// turn by as long as the filter takes to recover. Default 1.0 (the
+    /// attitude role's `pf` on the survey, seed 7: 1.1° of roll and 1.2°
+    /// of yaw error in 10°/s turns at 1.5 m/s, a tilt angle of 1.5°, while
+    /// its published σ stays 0.1-0.14°; our choice). 0 leaves it out.
+    pub heading_manoeuvre_factor: f64,
+    /// The squared angle is held at its peak and falls with this time
+    /// constant, s: how long the source's error outlasts the manoeuvre
+    /// ([`crate::ains::Manoeuvre`]). Default 3 (as the `pf`'s
+    /// `attitude_manoeuvre_time_s`: the attitude `pf`'s yaw error falls
+    /// from 1.2° to 0.2° in the 8 s after a turn on the survey, seed 7;
+    /// the `ekf`'s velocity RMS there is within 0.0002 m/s of each other
+    /// with 3, 5 and 10 s).
+    pub heading_manoeuvre_time_s: f64,
     /// A heading measurement is used at most once per this interval, s
     /// (the measurement's error is correlated: more frequent updates would
     /// only add weight). Default 1.
@@ -126,6 +148,8 @@ impl Default for EkfParams {
             heading_deviation_std_rad: 0.0052,
             ahrs_heading_std_rad: 0.0175,
             attitude_heading_std_floor_rad: 0.0017,
+            heading_manoeuvre_factor: 1.0,
+            heading_manoeuvre_time_s: 3.0,
             heading_interval_s: 1.0,
             dvl_std_m_s: 0.012,
             dvl_lever_arm_m: [0.0; 3],
@@ -188,6 +212,8 @@ pub struct EkfConfig {
     pub(super) heading_deviation_std: f64,
     pub(super) ahrs_heading_std: f64,
     pub(super) attitude_heading_std_floor: f64,
+    pub(super) heading_manoeuvre_factor: f64,
+    pub(super) heading_manoeuvre_time_s: f64,
     pub(super) heading_interval_ns: u64,
     pub(super) dvl_std: f64,
     pub(super) dvl_lever_arm: Vector3<f64>,
@@ -312,6 +338,22 @@ impl EkfParams {
                 "attitude_heading_std_floor_rad",
                 self.attitude_heading_std_floor_rad,
             )?,
+            heading_manoeuvre_factor: in_range(
+                "heading_manoeuvre_factor",
+                self.heading_manoeuvre_factor,
+                0.0,
+                100.0,
+                false,
+                "[0, 100]",
+            )?,
+            heading_manoeuvre_time_s: in_range(
+                "heading_manoeuvre_time_s",
+                self.heading_manoeuvre_time_s,
+                0.0,
+                day,
+                true,
+                "(0, 86400] s",
+            )?,
             heading_interval_ns: ns(in_range(
                 "heading_interval_s",
                 self.heading_interval_s,
@@ -412,6 +454,13 @@ mod tests {
                     ..Default::default()
                 },
                 "covariance_decimation",
+            ),
+            (
+                EkfParams {
+                    heading_manoeuvre_time_s: 0.0,
+                    ..Default::default()
+                },
+                "heading_manoeuvre_time_s",
             ),
             (
                 EkfParams {

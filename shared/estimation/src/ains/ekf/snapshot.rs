@@ -71,6 +71,8 @@ pub struct FilterState {
     /// The last IMU sample's bias-corrected angular rate, FRD, rad/s (the
     /// DVL lever arm's rotation term).
     pub omega_b_rad_s: [f64; 3],
+    /// The manoeuvre measure of the heading source's error model.
+    pub manoeuvre: crate::ains::Manoeuvre,
     /// The covariance's upper triangle, row by row (`N (N+1) / 2`).
     pub p_upper: Vec<f64>,
     /// The covariance block accumulated since the last propagation.
@@ -192,6 +194,9 @@ impl FilterState {
         finite("heading_bias_rad", &[self.heading_bias_rad])?;
         finite("heading_deviation_rad", &self.heading_deviation_rad)?;
         finite("omega_b_rad_s", &self.omega_b_rad_s)?;
+        if !self.manoeuvre.is_valid() {
+            return Err(EkfSnapshotError::OutOfRange("manoeuvre"));
+        }
         finite("p_upper", &self.p_upper)?;
         finite("block", &self.block.f_dt)?;
         finite("block", &self.block.c_dt)?;

@@ -9,7 +9,8 @@
 //! second order), and the random generator's state; `restore` draws the
 //! clouds again from them, Gaussian. A warm restart continues
 //! statistically, not bit for bit. Encoded as nauta records it (bincode 2
-//! serde, fixed-width integers) a snapshot takes 994 bytes (`cargo test
+//! serde, fixed-width integers) a snapshot takes 1335 bytes, the carried
+//! attitude's filter included (`cargo test
 //! --release -p nauta-estimation --test ains_pf restored -- --nocapture`).
 
 use serde::{Deserialize, Serialize};
@@ -44,6 +45,9 @@ pub struct AinsPfStats {
     pub fix: GateStats,
     /// Depth gauge readings.
     pub depth: GateStats,
+    /// Attitude inputs that corrected the carried attitude (or re-anchored
+    /// it; the decimated ones are not counted).
+    pub attitude: GateStats,
     /// Resamplings of a velocity component (eq. 11).
     pub velocity_resamples: u64,
     /// Resamplings of a position component (eq. 11).
@@ -78,6 +82,9 @@ pub struct AinsPfSnapshot {
     pub attitude_wxyz: [f64; 4],
     /// It came from the attitude input (not the AHRS).
     pub attitude_from_estimate: bool,
+    /// The carried attitude's variance, gyro bias, manoeuvre and last
+    /// correction.
+    pub attitude_track: super::attitude::AttitudeTrack,
     /// Stamps of the last attitude, DVL aiding, GPS, fix and depth used, ns.
     pub last_ns: [Option<u64>; 5],
     /// The depth gauge's tare.
@@ -128,6 +135,9 @@ impl AinsPfSnapshot {
             }
         }
         finite("attitude_wxyz", &self.attitude_wxyz)?;
+        if !self.attitude_track.is_valid() {
+            return Err(AinsPfSnapshotError::OutOfRange("attitude_track"));
+        }
         let t = &self.tare;
         finite("tare", &[t.offset_m, t.session_mean_m])?;
         Ok(())
