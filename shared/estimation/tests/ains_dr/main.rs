@@ -14,7 +14,6 @@
 mod harness;
 
 use harness::*;
-use nauta_estimation::Estimator;
 use nauta_estimation::ains::AinsInput;
 use nauta_estimation::ains::aiding;
 use nauta_estimation::ains::dr::{DeadReckoning, DrParams, DrSnapshot, Site};
@@ -22,6 +21,7 @@ use nauta_estimation::earth::{meridian_radius, transverse_radius};
 use nauta_estimation::frames::Vector;
 use nauta_estimation::predictor::{Form, PredictorParams, SensorErrorSpec};
 use nauta_estimation::readings::{Ahrs, Depth, Dvl, Gps, Imu, Nav};
+use nauta_estimation::{Estimator, Stamped};
 use nauta_sim::mission::Origin;
 use nauta_sim::scenario::{Generator, ScenarioKind, ScenarioParams, SurveyParams};
 use nauta_sim::suite::SuiteConfig;
@@ -172,6 +172,66 @@ fn eq1_and_eq4_on_a_synthetic_straight_leg() {
         "no GPS and no depth for 100 s"
     );
     assert!(last.predicted_drift_m > 2.5 * 2f64.sqrt());
+}
+
+/// `dvl_delay_s`: a DVL sample's velocity holds from its stamp plus the
+/// delay on. A north leg whose DVL says 1 m/s from t = 1 s and 2 m/s from
+/// t = 10 s: with a 0.5 s delay the whole velocity history is 0.5 s later,
+/// so at the end the leg is 0.5 s × 2 m/s shorter than without; a snapshot
+/// taken while a sample waits continues bit for bit.
+#[test]
+fn a_delayed_dvl_takes_effect_at_its_stamp_plus_the_delay() {
+    let run = |delay_s: f64, snapshot_at: Option<usize>| {
+        let params = DrParams {
+            dvl_delay_s: delay_s,
+            spike_filter: false,
+            ..DrParams::default()
+        };
+        let mut dr = DeadReckoning::new(&params, SITE).expect("valid");
+        let mut inputs = vec![gps(0.0, SITE.lat_rad, SITE.lon_rad), ahrs(0.0, 0.0)];
+        for k in 1..=200 {
+            let t = k as f64 * 0.1;
+            if k % 10 == 0 {
+                inputs.push(dvl(t, [if t >= 10.0 { 2.0 } else { 1.0 }, 0.0, 0.0]));
+            }
+            inputs.push(ahrs(t, 0.0));
+        }
+        let (mut out, mut restored) = (Vec::new(), None);
+        for (i, input) in inputs.iter().enumerate() {
+            dr.on_input(input, &mut out).expect("valid input");
+            if Some(i) == snapshot_at {
+                let s = dr.snapshot().expect("a snapshot");
+                let mut other = DeadReckoning::new(&params, SITE).expect("valid");
+                other.restore(&s, input.stamp_ns()).expect("restored");
+                restored = Some((other, i));
+            }
+        }
+        if let Some((mut other, i)) = restored {
+            let mut rest = Vec::new();
+            for input in &inputs[i + 1..] {
+                other.on_input(input, &mut rest).expect("valid input");
+            }
+            let last = out.last().expect("outputs");
+            let again = rest.last().expect("outputs");
+            assert_eq!(
+                (last.lat_rad.to_bits(), last.lon_rad.to_bits()),
+                (again.lat_rad.to_bits(), again.lon_rad.to_bits()),
+                "the restored dr did not continue bit for bit"
+            );
+        }
+        let last = *out.last().expect("outputs");
+        (last.lat_rad - SITE.lat_rad) * meridian_radius(SITE.lat_rad)
+    };
+    let (now, delayed) = (run(0.0, None), run(0.5, None));
+    // 1 m/s from 1 s (the first DVL sample) to 10 s, then 2 m/s to 20 s.
+    assert!((now - 29.0).abs() < 1e-6, "{now} m");
+    assert!(
+        (delayed - (now - 0.5 * 2.0)).abs() < 1e-6,
+        "{delayed} m against {now} m"
+    );
+    // The sample of t = 10 s is waiting 0.05 s after it arrived.
+    let waiting = 2 + 100 + 10;
+    run(0.5, Some(waiting));
 }
 
 /// Eqs. 1 and 4 on a straight 1 km leg of the simulator with every sensor

@@ -64,7 +64,7 @@ mod snapshot;
 pub mod spike;
 
 pub use params::{DrConfig, DrParams, DrParamsError};
-pub use snapshot::{DrSnapshot, DrSnapshotError, DrStats, NavState};
+pub use snapshot::{DrSnapshot, DrSnapshotError, DrStats, MAX_PENDING_DVL, NavState};
 
 use crate::ains::AinsInput;
 use crate::ains::aiding;
@@ -136,6 +136,7 @@ impl DeadReckoning {
                 euler_rad: None,
                 last_ahrs_ns: None,
                 last_dvl_aid_ns: None,
+                pending_dvl: [None; MAX_PENDING_DVL],
                 last_gps_ns: None,
                 last_depth_ns: None,
                 stats: DrStats::default(),
@@ -190,7 +191,39 @@ impl DeadReckoning {
     }
 
     /// Eq. 1 from the last step to `t` (trapezoid), and the predictor.
+    /// Eq. 1 integrated up to `t`, a delayed DVL sample (`dvl_delay_s`)
+    /// taking effect at its time on the way.
     fn step(&mut self, t: u64) {
+        while let Some((from, v)) = self.nav.pending_dvl[0].filter(|(from, _)| *from <= t) {
+            self.integrate_to(from);
+            self.nav.v_body_m_s = v;
+            self.nav.pending_dvl.rotate_left(1);
+            self.nav.pending_dvl[MAX_PENDING_DVL - 1] = None;
+        }
+        self.integrate_to(t);
+    }
+
+    /// A DVL body velocity in use from `t + dvl_delay_s` on.
+    fn use_dvl(&mut self, v: [f64; 3], t: u64) {
+        if self.config.dvl_delay_ns == 0 {
+            self.nav.v_body_m_s = v;
+            return;
+        }
+        let q = &mut self.nav.pending_dvl;
+        if q[MAX_PENDING_DVL - 1].is_some() {
+            // Full: the oldest takes effect now.
+            if let Some((_, oldest)) = q[0] {
+                self.nav.v_body_m_s = oldest;
+            }
+            q.rotate_left(1);
+            q[MAX_PENDING_DVL - 1] = None;
+        }
+        if let Some(slot) = q.iter_mut().find(|s| s.is_none()) {
+            *slot = Some((t.saturating_add(self.config.dvl_delay_ns), v));
+        }
+    }
+
+    fn integrate_to(&mut self, t: u64) {
         let v_new = self.v_ned_now();
         if let Some(t0) = self.nav.last_step_ns {
             let dt = t.saturating_sub(t0) as f64 * 1e-9;
@@ -316,18 +349,18 @@ impl DeadReckoning {
         let Some(e) = euler else {
             // No attitude to predict with: taken as it is.
             self.spike.forget();
-            self.nav.v_body_m_s = v;
+            self.use_dvl(v, t);
             self.nav.last_dvl_aid_ns = Some(t);
             return Ok(());
         };
         match self.spike.on_dvl(v, e) {
             Decision::Accepted => {
-                self.nav.v_body_m_s = v;
+                self.use_dvl(v, t);
                 self.nav.last_dvl_aid_ns = Some(t);
             }
             Decision::TrustedAgain => {
                 self.nav.stats.spikes_trusted_again += 1;
-                self.nav.v_body_m_s = v;
+                self.use_dvl(v, t);
                 self.nav.last_dvl_aid_ns = Some(t);
             }
             Decision::Rejected(p) => {

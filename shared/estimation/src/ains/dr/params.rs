@@ -34,6 +34,13 @@ pub struct DrParams {
     /// A DVL velocity faster than this is refused as bad input, m/s.
     /// Default 10 (our choice; AUVs do not go at 20 knots).
     pub max_speed_m_s: f64,
+    /// How long after its stamp a DVL sample's velocity holds, s: a DVL that
+    /// stamps the start of its averaging interval, or a clock offset between
+    /// the DVL and the attitude source. The sample is judged by the spike
+    /// filter when it arrives and used from `stamp + dvl_delay_s` on (at
+    /// most 8 samples waiting). Default 0. A-KIT's Snapir logs: 1.0
+    /// (`docs/analysis/akit_dvl_timing.py`: fitted on trajectories 1-4).
+    pub dvl_delay_s: f64,
     /// Horizontal position σ per axis before the first GPS fix (the
     /// position is then the site's), m. Default 1000 (our choice).
     pub initial_position_std_m: f64,
@@ -77,6 +84,7 @@ impl Default for DrParams {
             max_prediction_s: 2.0,
             aiding_timeout_s: 1.0,
             max_speed_m_s: 10.0,
+            dvl_delay_s: 0.0,
             initial_position_std_m: 1000.0,
             surface_window_s: 1.5,
             tare_max_vertical_speed_m_s: 0.05,
@@ -122,6 +130,7 @@ pub struct DrConfig {
     pub(super) spike: SpikeConfig,
     pub(super) aiding_timeout_ns: u64,
     pub(super) max_speed_m_s: f64,
+    pub(super) dvl_delay_ns: u64,
     pub(super) initial_position_std_m: f64,
     pub(super) surface_window_ns: u64,
     pub(super) tare_max_vertical_speed_m_s: f64,
@@ -171,6 +180,7 @@ impl DrParams {
             true,
             "(0, 100]",
         )?;
+        let delay = in_range("dvl_delay_s", self.dvl_delay_s, 0.0, 10.0, false, "[0, 10]")?;
         let initial = positive("initial_position_std_m", self.initial_position_std_m)?;
         let window = in_range(
             "surface_window_s",
@@ -219,6 +229,7 @@ impl DrParams {
             },
             aiding_timeout_ns: ns(timeout),
             max_speed_m_s: max_speed,
+            dvl_delay_ns: ns(delay),
             initial_position_std_m: initial,
             surface_window_ns: ns(window),
             tare_max_vertical_speed_m_s: vz,

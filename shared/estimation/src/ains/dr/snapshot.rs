@@ -28,6 +28,10 @@ pub struct DrStats {
     pub gps_gated_in_a_row: u32,
 }
 
+/// DVL samples a delayed DVL (`dvl_delay_s`) keeps waiting at most; a
+/// ninth makes the oldest take effect at once.
+pub const MAX_PENDING_DVL: usize = 8;
+
 /// The navigation state proper.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct NavState {
@@ -52,6 +56,9 @@ pub struct NavState {
     pub last_ahrs_ns: Option<u64>,
     /// Stamp of the last DVL sample whose velocity was used as measured, ns.
     pub last_dvl_aid_ns: Option<u64>,
+    /// DVL samples taken but not yet in use (`dvl_delay_s`): from when (ns)
+    /// and the body velocity, oldest first.
+    pub pending_dvl: [Option<(u64, [f64; 3])>; MAX_PENDING_DVL],
     /// Stamp of the last GPS fix, ns.
     pub last_gps_ns: Option<u64>,
     /// Stamp of the last depth sample, ns.
@@ -103,6 +110,9 @@ impl DrSnapshot {
         finite("p_ned_m", &n.p_ned_m)?;
         finite("v_body_m_s", &n.v_body_m_s)?;
         finite("v_ned_m_s", &n.v_ned_m_s)?;
+        for (_, v) in n.pending_dvl.iter().flatten() {
+            finite("pending_dvl", v)?;
+        }
         if let Some(e) = &n.euler_rad {
             finite("euler_rad", e)?;
             if e[0].abs() > std::f64::consts::PI + 1e-9
