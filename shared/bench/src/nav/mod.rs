@@ -568,8 +568,9 @@ fn print_table(r: &Value) {
     if let Some(v) = r["survey"]["aided"].as_object() {
         for (variant, m) in v {
             println!(
-                "survey {variant:<4} horizontal RMS {:.2} m, velocity RMS N/E/D {:.4} / {:.4} / {:.4} m/s, dive drift {:.2} m/km, slope N/E/D {} m/km",
+                "survey {variant:<4} horizontal RMS {:.2} m, truth in the 95 % region {:.1} %, velocity RMS N/E/D {:.4} / {:.4} / {:.4} m/s, dive drift {:.2} m/km, slope N/E/D {} m/km",
                 m["horizontal_rms_m"].as_f64().unwrap_or(f64::NAN),
+                m["inside_95_pct"].as_f64().unwrap_or(f64::NAN),
                 m["vel_north_rms_m_s"].as_f64().unwrap_or(f64::NAN),
                 m["vel_east_rms_m_s"].as_f64().unwrap_or(f64::NAN),
                 m["vel_down_rms_m_s"].as_f64().unwrap_or(f64::NAN),
