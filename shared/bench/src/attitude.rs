@@ -9,7 +9,7 @@
 //! - [`run_sim`]: paper 000's three conditions (still, pitch and roll, yaw;
 //!   Table I) on the simulator, RMS error per quaternion component and in
 //!   roll, pitch and yaw against the truth, and the particle filter's
-//!   throughput at 1,000 particles.
+//!   throughput at its default particle count (700 since 2026-12-02).
 //!
 //! Not wired to the CLI here (`bench/mod.rs` and `main.rs` are the CLI's).
 //!
@@ -78,7 +78,7 @@
 //!  "pf_samples_per_s": <float>}
 //! ```
 //!
-//! (600 s per condition, seed 7, 1,000 particles.)
+//! (600 s per condition, seed 7, the default particle count.)
 //!
 //! # Simulator: conventions and choices
 //!
@@ -98,8 +98,8 @@
 //!   quaternion components with the estimate's sign chosen to agree with
 //!   the truth's.
 //! - `pf_samples_per_s`: samples divided by the wall time of the `pf`'s
-//!   `predict` + `update` + `estimate` over the three conditions (1,000
-//!   particles, the default).
+//!   `predict` + `update` + `estimate` over the three conditions (the
+//!   default particle count).
 //!
 //! # Measured (2026-11-22, this machine: 2 cores shared with other work)
 //!
@@ -155,7 +155,8 @@
 //! ```
 //!
 //! Every `pf` error is at least 106 times below `gyro`'s. `pf_samples_per_s`
-//! 25,761 to 27,106 over three runs (1,000 particles, one core).
+//! 25,761 to 27,106 over three runs (1,000 particles then, one core; see
+//! BENCHMARKS.md for today's figures at 700).
 use std::path::Path;
 use std::time::Instant;
 
