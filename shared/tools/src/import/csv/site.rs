@@ -24,20 +24,9 @@ use anyhow::bail;
 use serde::Deserialize;
 use toml::Spanned;
 
-/// One transponder, validated.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Transponder {
-    /// Id, as in `lbl.csv`'s `transponder_id`.
-    pub id: u32,
-    /// North of the origin, m.
-    pub north_m: f64,
-    /// East of the origin, m.
-    pub east_m: f64,
-    /// Depth, m, positive down.
-    pub depth_m: f64,
-    /// Turnaround delay, s (its own, else the site's), if given.
-    pub turnaround_s: Option<f64>,
-}
+/// One transponder, validated: the run's own type (`nauta_log::run`), the
+/// one a recording's readers build from its site metadata.
+pub use nauta_log::run::Transponder;
 
 /// A validated `site.toml`.
 #[derive(Debug, Clone, PartialEq)]
