@@ -452,3 +452,118 @@ fn the_solution_carries_the_attitude() {
     let _: Rotation<_, _> = q;
     assert!((q.as_nalgebra().norm() - 1.0).abs() < 1e-12);
 }
+
+/// `seconds` at rest from `t0`: IMU at 100 Hz, the AHRS at 10 Hz while
+/// `ahrs_until` has not passed, the DVL at 5 Hz (locked or not), GPS at
+/// `gps(t)` 1 Hz when Some.
+fn rest(
+    e: &mut Ekf,
+    t0: f64,
+    seconds: f64,
+    ahrs_until: f64,
+    lock: bool,
+    gps_lat: impl Fn(f64) -> Option<f64>,
+) -> Vec<Nav> {
+    let mut inputs = Vec::new();
+    for k in 1..=(seconds * 100.0).round() as u64 {
+        let t = t0 + k as f64 * 0.01;
+        if k % 10 == 0 && t <= ahrs_until {
+            inputs.push(ahrs(t));
+        }
+        inputs.push(imu(t));
+        if k % 20 == 0 {
+            let AinsInput::Dvl(d) = dvl(t, [0.0; 3]) else {
+                unreachable!()
+            };
+            inputs.push(AinsInput::Dvl(Dvl {
+                bottom_lock: lock,
+                beams_valid: if lock { 0b1111 } else { 0 },
+                ..d
+            }));
+        }
+        if k % 100 == 0
+            && let Some(lat) = gps_lat(t)
+        {
+            inputs.push(gps(t, lat));
+        }
+    }
+    feed(e, &inputs)
+}
+
+/// A GPS that never comes: `position_wait_s` (30 s) after the first IMU
+/// sample with a heading the filter starts at the site, σ
+/// `initial_position_std_m` (1 km), the `GPS` bit clear, and goes on
+/// publishing; a warm restart keeps that state, and a late fix is an
+/// ordinary update that brings the position and its σ in.
+#[test]
+fn without_a_gps_the_filter_starts_at_the_site_and_a_late_fix_takes_over() {
+    let mut e = Ekf::new(&EkfParams::default(), SITE).expect("valid");
+    assert!(feed(&mut e, &[ahrs(0.0)]).is_empty());
+    assert!(rest(&mut e, 0.0, 29.99, 1e9, true, |_| None).is_empty());
+    let out = rest(&mut e, 29.99, 60.0, 1e9, true, |_| None);
+    assert_eq!(out.first().map(|n| n.stamp_ns), Some(ns(30.01)));
+    let last = *out.last().expect("outputs");
+    assert!(
+        last.pos_std_ned_m.x() >= 1000.0 && last.pos_std_ned_m.y() >= 1000.0,
+        "{last:?}"
+    );
+    assert_eq!(last.aiding_mode & aiding::GPS, 0);
+    assert_ne!(last.aiding_mode & aiding::DVL, 0);
+    let snap = e.snapshot().expect("snapshot");
+    let mut restarted = Ekf::new(&EkfParams::default(), SITE).expect("valid");
+    restarted.restore(&snap, last.stamp_ns).expect("restore");
+    let north = SITE.lat_rad + 50.0 / 6_363_000.0;
+    for est in [&mut e, &mut restarted] {
+        let out = rest(est, 89.99, 5.0, 1e9, true, |_| Some(north));
+        let n = *out.last().expect("outputs");
+        assert!((n.lat_rad - north).abs() * 6.36e6 < 3.0, "{n:?}");
+        assert!(n.pos_std_ned_m.x() < 3.0, "{n:?}");
+        assert_ne!(n.aiding_mode & aiding::GPS, 0);
+    }
+}
+
+/// The heading stops (here the AHRS, the only source): one solution per
+/// IMU sample goes on, the `HEADING` bit clears after the aiding timeout,
+/// and the yaw σ grows.
+#[test]
+fn when_the_heading_stops_the_solution_goes_on_and_says_so() {
+    use nauta_estimation::ains::ekf::model::ATT;
+    let yaw_var = |e: &Ekf| e.filter().expect("running").p[(ATT + 2, ATT + 2)];
+    let mut e = started();
+    let mut out = rest(&mut e, 0.01, 30.0, 30.0, true, |_| Some(SITE.lat_rad));
+    let while_aided = yaw_var(&e);
+    out.extend(rest(&mut e, 30.01, 30.0, 30.0, true, |_| {
+        Some(SITE.lat_rad)
+    }));
+    assert_eq!(out.len(), 6000);
+    let at = |t: f64| *out.iter().find(|n| n.stamp_ns >= ns(t)).expect("output");
+    assert_ne!(at(29.0).aiding_mode & aiding::HEADING, 0);
+    assert_eq!(at(40.0).aiding_mode & aiding::HEADING, 0);
+    assert!(
+        yaw_var(&e) > 1.2 * while_aided,
+        "yaw σ {} rad then {} rad",
+        while_aided.sqrt(),
+        yaw_var(&e).sqrt()
+    );
+}
+
+/// A DVL that never locks: free inertial, the `DVL` bit clear, the
+/// velocity σ growing, one solution per IMU sample.
+#[test]
+fn a_dvl_that_never_locks_leaves_free_inertial_and_an_honest_sigma() {
+    let mut e = Ekf::new(&EkfParams::default(), SITE).expect("valid");
+    feed(&mut e, &[ahrs(0.0), gps(0.0, SITE.lat_rad)]);
+    let out = rest(&mut e, 0.0, 60.0, 1e9, false, |_| None);
+    assert_eq!(out.len(), 6000);
+    assert!(out.iter().all(|n| n.aiding_mode & aiding::DVL == 0));
+    assert!(e.stats().dvl_no_lock >= 299, "{:?}", e.stats());
+    let sigma: Vec<f64> = out
+        .iter()
+        .step_by(1000)
+        .map(|n| n.vel_std_ned_m_s.x())
+        .collect();
+    assert!(
+        sigma.windows(2).all(|w| w[1] > w[0]),
+        "the velocity σ grows: {sigma:?}"
+    );
+}

@@ -474,6 +474,147 @@ fn nothing_before_an_attitude_and_a_fix() {
     assert!(e.stats().gps_velocity.used > 20);
 }
 
+/// North of the site, m.
+fn north_of_site(n: &Nav) -> f64 {
+    nauta_estimation::local::flat::to_local(SITE.lat_rad, SITE.lon_rad, n.lat_rad, n.lon_rad).0
+}
+
+/// A GPS that never comes: `position_wait_s` (30 s) after the first IMU
+/// sample with an attitude the filters start at the site, σ
+/// `initial_position_std_m` (1 km) north and east and the `GPS` bit clear,
+/// and go on publishing; a warm restart keeps that state, and the first
+/// fix then draws the position around itself.
+#[test]
+fn without_a_gps_the_filters_start_at_the_site_and_a_late_fix_takes_over() {
+    let mut e = ParticleAins::new(&AinsPfParams::default(), SITE).expect("valid");
+    assert!(
+        at_rest(&mut e, 0.0, 29.9, |_| None).is_empty(),
+        "still waiting"
+    );
+    let out = at_rest(&mut e, 29.9, 60.0, |_| None);
+    // The first attitude came with the IMU sample at 0.01 s (after it).
+    assert_eq!(out.first().map(|n| n.stamp_ns), Some(ns(30.02)));
+    let last = *out.last().expect("outputs");
+    let s = last.pos_std_ned_m.to_array();
+    for (axis, s) in s.iter().take(2).enumerate() {
+        assert!((700.0..1300.0).contains(s), "axis {axis}: σ {s} m");
+    }
+    assert!(last.predicted_drift_m > 1000.0, "{last:?}");
+    assert_eq!(
+        last.aiding_mode,
+        aiding::DVL | aiding::HEADING | aiding::DEPTH,
+        "no GPS bit"
+    );
+    assert!(
+        last.vel_ned_m_s.norm() < 0.02,
+        "the DVL still aids: {last:?}"
+    );
+    let snap = e.snapshot().expect("a snapshot once running");
+    assert!(snap.position_from_site);
+    let mut restarted = ParticleAins::new(&AinsPfParams::default(), SITE).expect("valid");
+    restarted
+        .restore(&snap, last.stamp_ns)
+        .expect("its own snapshot");
+    for est in [&mut e, &mut restarted] {
+        let out = at_rest(est, 89.9, 5.0, |_| Some(50.0));
+        let n = *out.last().expect("outputs");
+        assert!((north_of_site(&n) - 50.0).abs() < 3.0, "{n:?}");
+        assert!(n.pos_std_ned_m.x() < 3.0, "{n:?}");
+        assert_ne!(n.aiding_mode & aiding::GPS, 0);
+        assert!(!est.snapshot().expect("snapshot").position_from_site);
+    }
+}
+
+/// The attitude stream stops: the AHRS (with the site's declination) sets
+/// the attitude, the solution goes on at one per IMU sample; with no
+/// heading at all the `HEADING` bit clears and the solution still goes on.
+#[test]
+fn when_the_attitude_stream_stops_the_ahrs_takes_over_and_nothing_stops() {
+    let mut e = ParticleAins::new(&AinsPfParams::default(), SITE).expect("valid");
+    at_rest(&mut e, 0.0, 20.0, |_| Some(0.0));
+    let ahrs = |t: f64| {
+        AinsInput::Ahrs(Ahrs {
+            stamp_ns: ns(t),
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+            heading_mag_rad: 0.0,
+        })
+    };
+    let mut out = Vec::new();
+    let (mut with_ahrs, mut without) = (Vec::new(), Vec::new());
+    for k in 1..=2000u32 {
+        let t = 20.0 + f64::from(k) * 0.01;
+        let sink = if k <= 1000 {
+            &mut with_ahrs
+        } else {
+            &mut without
+        };
+        e.on_input(&imu(t), sink).expect("imu");
+        if k <= 1000 && k % 10 == 0 {
+            e.on_input(&ahrs(t), &mut out).expect("ahrs");
+        }
+        if k % 20 == 0 {
+            e.on_input(&dvl(t), &mut out).expect("dvl");
+        }
+        if k % 100 == 0 {
+            e.on_input(&gps(t, 0.0), &mut out).expect("gps");
+        }
+    }
+    assert!(out.is_empty(), "only the IMU triggers outputs");
+    assert_eq!((with_ahrs.len(), without.len()), (1000, 1000));
+    let last = with_ahrs.last().expect("outputs");
+    assert_ne!(
+        last.aiding_mode & aiding::HEADING,
+        0,
+        "the AHRS is a heading"
+    );
+    let last = without.last().expect("outputs");
+    assert_eq!(last.aiding_mode & aiding::HEADING, 0, "{last:?}");
+    assert!(north_of_site(last).abs() < 3.0, "{last:?}");
+    assert!(last.vel_ned_m_s.norm() < 0.05, "{last:?}");
+}
+
+/// A DVL that never locks: the velocity comes from the IMU alone, the
+/// `DVL` bit stays clear and the velocity σ grows, and the solution goes
+/// on at one per IMU sample.
+#[test]
+fn a_dvl_that_never_locks_leaves_the_imu_and_an_honest_spread() {
+    let mut e = ParticleAins::new(&AinsPfParams::default(), SITE).expect("valid");
+    let mut out = Vec::new();
+    let no_lock = |t: f64| {
+        let AinsInput::Dvl(d) = dvl(t) else {
+            unreachable!()
+        };
+        AinsInput::Dvl(Dvl {
+            bottom_lock: false,
+            beams_valid: 0,
+            ..d
+        })
+    };
+    let mut sigma = Vec::new();
+    for k in 1..=6000u32 {
+        let t = f64::from(k) * 0.01;
+        e.on_input(&imu(t), &mut out).expect("imu");
+        e.on_input(&attitude(t), &mut out).expect("attitude");
+        if k % 20 == 0 {
+            e.on_input(&no_lock(t), &mut out).expect("dvl");
+        }
+        if k == 100 {
+            e.on_input(&gps(t, 0.0), &mut out).expect("gps");
+        }
+        if k % 1000 == 0 {
+            sigma.push(out.last().map_or(0.0, |n| n.vel_std_ned_m_s.x()));
+        }
+    }
+    assert_eq!(out.len(), 6000 - 100);
+    assert!(out.iter().all(|n| n.aiding_mode & aiding::DVL == 0));
+    assert!(e.stats().dvl_no_lock >= 299, "{:?}", e.stats());
+    assert!(
+        sigma.windows(2).all(|w| w[1] > w[0]),
+        "the velocity σ grows: {sigma:?}"
+    );
+}
+
 /// A GPS that jumps 100 m: the gate refuses the first `gate_max_rejections`
 /// fixes, the next one re-anchors the position on the new fixes. A
 /// `positioning/fix` is used only with `position_aiding`.

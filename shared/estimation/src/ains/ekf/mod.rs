@@ -31,7 +31,11 @@
 //!   fix) and a heading (attitude estimate or AHRS) have come; the first
 //!   IMU sample after that starts the filter there, at rest (or at the
 //!   GPS velocity), with the attitude estimate's attitude (else the
-//!   AHRS's roll, pitch and heading). The initial yaw error covariance
+//!   AHRS's roll, pitch and heading). Without a position
+//!   `position_wait_s` after the first IMU sample with a heading (a GPS
+//!   that never comes), the position is the site's with σ
+//!   `initial_position_std_m` (as `dr` starts), and the first fix that
+//!   comes later is an ordinary update. The initial yaw error covariance
 //!   holds the heading source's bias and deviation priors, anti-correlated
 //!   with those states (the yaw *is* the measured heading then).
 //!
@@ -114,6 +118,8 @@ enum Kind {
 pub struct Ekf {
     config: EkfConfig,
     declination_rad: f64,
+    /// The site's latitude and longitude, rad (the start without a fix).
+    site_rad: [f64; 2],
     filter: Option<Filter>,
     pending: Pending,
     stamps: Stamps,
@@ -151,6 +157,7 @@ impl Ekf {
         Ok(Self {
             config,
             declination_rad: site.declination_rad,
+            site_rad: [site.lat_rad, site.lon_rad],
             filter: None,
             pending: Pending::default(),
             stamps: Stamps::default(),
@@ -189,6 +196,24 @@ impl Ekf {
             Kind::GpsVelocity => &mut s.gps_velocity,
             Kind::Fix => &mut s.fix,
             Kind::Heading => &mut s.heading,
+        }
+    }
+
+    /// Without a position `position_wait_s` after the first IMU sample with
+    /// a heading: the site's position, σ `initial_position_std_m`.
+    fn site_after_waiting(&mut self, t: u64) {
+        if self.pending.position.is_some() || self.pending.attitude.is_none() {
+            return;
+        }
+        let since = *self.stamps.waiting_since.get_or_insert(t);
+        if t.saturating_sub(since) >= self.config.position_wait_ns {
+            let s = self.config.initial_position_std;
+            self.pending.position = Some([self.site_rad[0], self.site_rad[1], s, s, 0.0]);
+            tracing::info!(
+                waited_s = t.saturating_sub(since) as f64 * 1e-9,
+                sigma_m = s,
+                "no position came: the ekf aided INS starts at the site"
+            );
         }
     }
 
@@ -345,6 +370,7 @@ impl Ekf {
                 m.interval_s,
             )
             .map_err(|e| err("imu-refused", e))?;
+            self.site_after_waiting(m.stamp_ns);
             if !self.try_initialise() {
                 return Ok(());
             }

@@ -39,6 +39,15 @@ pub struct EkfParams {
     /// Initial velocity σ per axis, m/s (the filter starts at rest).
     /// Default 0.5.
     pub initial_velocity_std_m_s: f64,
+    /// Without a first position (no GPS fix, no `positioning/fix`), the
+    /// filter starts at the site's position this long after the first IMU
+    /// sample with a heading, s (a GPS that never comes, a launch
+    /// submerged). Default 30 (our choice: a surfaced receiver gives a fix
+    /// within seconds).
+    pub position_wait_s: f64,
+    /// Initial σ north and east when started at the site, m. Default 1000
+    /// (as `dr`).
+    pub initial_position_std_m: f64,
     /// Initial roll and pitch σ when the AHRS initialises the attitude,
     /// rad. Default 0.0087 (0.5°).
     pub initial_tilt_std_rad: f64,
@@ -140,6 +149,8 @@ impl Default for EkfParams {
             initial_gyro_bias_std_rad_s: 3.5e-3,
             initial_accel_bias_std_m_s2: 0.03,
             initial_velocity_std_m_s: 0.5,
+            position_wait_s: 30.0,
+            initial_position_std_m: 1000.0,
             initial_tilt_std_rad: 0.0087,
             heading_bias_std_rad: 0.035,
             heading_bias_time_s: 600.0,
@@ -204,6 +215,8 @@ pub struct EkfConfig {
     pub(super) initial_gyro_bias_std: f64,
     pub(super) initial_accel_bias_std: f64,
     pub(super) initial_velocity_std: f64,
+    pub(super) position_wait_ns: u64,
+    pub(super) initial_position_std: f64,
     pub(super) initial_tilt_std: f64,
     pub(super) heading_bias_std: f64,
     pub(super) heading_bias_time_s: f64,
@@ -291,6 +304,22 @@ impl EkfParams {
             initial_velocity_std: positive(
                 "initial_velocity_std_m_s",
                 self.initial_velocity_std_m_s,
+            )?,
+            position_wait_ns: ns(in_range(
+                "position_wait_s",
+                self.position_wait_s,
+                0.0,
+                day,
+                false,
+                "[0, 86400]",
+            )?),
+            initial_position_std: in_range(
+                "initial_position_std_m",
+                self.initial_position_std_m,
+                0.0,
+                1e6,
+                true,
+                "(0, 1e6]",
             )?,
             initial_tilt_std: angle("initial_tilt_std_rad", self.initial_tilt_std_rad)?,
             heading_bias_std: in_range(

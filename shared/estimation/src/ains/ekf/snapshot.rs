@@ -114,6 +114,8 @@ pub struct Stamps {
     pub heading_tried: Option<u64>,
     /// Any attitude estimate (preferred over the AHRS while fresh).
     pub attitude_seen: Option<u64>,
+    /// The first IMU sample with a heading while no position has come.
+    pub waiting_since: Option<u64>,
 }
 
 /// Everything another `ekf` instance needs to continue bit for bit.

@@ -81,8 +81,12 @@
 //! position (a GPS fix, or a `positioning/fix` with `position_aiding`) have
 //! come; the clouds are drawn then, position around the fix, depth around
 //! the gauge's last tared reading, velocity around the last DVL velocity
-//! (or zero). **Outputs**: one [`Nav`] per IMU sample from then on, stamped
-//! with it.
+//! (or zero). Without a position `position_wait_s` after the first IMU
+//! sample with an attitude (a GPS that never comes, a launch submerged),
+//! the position cloud is drawn around the site with σ
+//! `initial_position_std_m` (as `dr` starts), the `GPS` bit clear; the
+//! first position then redraws the horizontal cloud around itself.
+//! **Outputs**: one [`Nav`] per IMU sample from then on, stamped with it.
 //!
 //! **Measured** (survey scenario, 43 minutes, one 3.8 km dive, GPS only at
 //! the surface, no position aiding, seed 7, the attitude input from paper
@@ -189,8 +193,14 @@ impl Filter {
 pub struct ParticleAins {
     config: AinsPfConfig,
     declination_rad: f64,
+    /// The site's latitude and longitude, rad (the start without a fix).
+    site_rad: [f64; 2],
     /// Origin of the local north/east; `Some` once initialised.
     origin_rad: Option<[f64; 2]>,
+    /// The filters started at the site, no position has come yet.
+    position_from_site: bool,
+    /// First IMU sample with an attitude while no position has come, ns.
+    waiting_since_ns: Option<u64>,
     vel: Filter,
     pos: Filter,
     noise: Noise,
@@ -233,7 +243,10 @@ impl ParticleAins {
         Ok(Self {
             config,
             declination_rad: site.declination_rad,
+            site_rad: [site.lat_rad, site.lon_rad],
             origin_rad: None,
+            position_from_site: false,
+            waiting_since_ns: None,
             vel: Filter::new(config.n_v, true),
             pos: Filter::new(config.n_p, true),
             noise: Noise::new(config.seed),
@@ -272,6 +285,9 @@ impl ParticleAins {
 
     /// Eqs. 17-21 for one IMU sample, then the output.
     fn on_imu(&mut self, m: &Imu, t: u64, out: &mut Vec<Nav>) -> Result<(), EstimatorError> {
+        if self.origin_rad.is_none() && self.attitude.is_some() {
+            self.start_at_site_after_waiting(t);
+        }
         let (Some(origin), Some(q)) = (self.origin_rad, self.attitude) else {
             return Ok(());
         };
@@ -532,6 +548,42 @@ impl ParticleAins {
         }
     }
 
+    /// Without a position `position_wait_s` after the first IMU sample with
+    /// an attitude: the filters start at the site, σ
+    /// `initial_position_std_m` north and east.
+    fn start_at_site_after_waiting(&mut self, t: u64) {
+        let since = *self.waiting_since_ns.get_or_insert(t);
+        if t.saturating_sub(since) < self.config.position_wait_ns {
+            return;
+        }
+        let [lat, lon] = self.site_rad;
+        let s = self.config.initial_position_std;
+        self.initialise(lat, lon, [s, s], t);
+        self.position_from_site = true;
+        tracing::info!(
+            waited_s = t.saturating_sub(since) as f64 * 1e-9,
+            sigma_m = s,
+            "no position came: the pf aided INS starts at the site"
+        );
+    }
+
+    /// The first position after a start at the site: the horizontal
+    /// particles are drawn around it (the origin moves there), the velocity
+    /// and depth kept.
+    fn redraw_horizontal(&mut self, lat: f64, lon: f64, sigma: [f64; 2]) {
+        let c = self.config;
+        let drift = Moments {
+            mean: 0.0,
+            var: c.drift_std * c.drift_std,
+        };
+        for (comp, s) in self.pos.c.iter_mut().zip(sigma) {
+            comp.spread(0.0, s, drift, &mut self.noise);
+        }
+        self.pos.refresh();
+        self.origin_rad = Some([lat, lon]);
+        self.position_from_site = false;
+    }
+
     /// Draws both clouds (module docs) at a first fix `(lat, lon)` of σ
     /// `sigma` (north, east).
     fn initialise(&mut self, lat: f64, lon: f64, sigma: [f64; 2], t: u64) {
@@ -578,6 +630,11 @@ impl ParticleAins {
             }
             return;
         };
+        if self.position_from_site {
+            self.redraw_horizontal(lat, lon, sigma);
+            self.last_ns[kind] = Some(t);
+            return;
+        }
         let (n, e) = flat::to_local(origin[0], origin[1], lat, lon);
         if self.position_update(&[0, 1], &[n, e], &sigma, kind) {
             self.last_ns[kind] = Some(t);
@@ -679,6 +736,7 @@ impl Estimator for ParticleAins {
         Some(AinsPfSnapshot {
             last_stamp_ns: self.last_stamp_ns?,
             origin_rad: origin,
+            position_from_site: self.position_from_site,
             velocity: Self::moments(&self.vel),
             accel_bias: ComponentMoments {
                 mean: bias.map(|m| m.mean),
@@ -732,6 +790,7 @@ impl Estimator for ParticleAins {
         self.pos = pos;
         self.noise = noise;
         self.origin_rad = Some(s.origin_rad);
+        self.position_from_site = s.position_from_site;
         self.attitude = Some(attitude);
         self.attitude_from_estimate = s.attitude_from_estimate;
         self.track = s.attitude_track;

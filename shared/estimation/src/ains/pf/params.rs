@@ -135,6 +135,16 @@ pub struct AinsPfParams {
     pub initial_velocity_std_m_s: f64,
     /// σ of the depth particles at the initialisation, m. Default 0.1.
     pub initial_depth_std_m: f64,
+    /// Without a first position (no GPS fix, no `positioning/fix`), the
+    /// filters start at the site's position this long after the first IMU
+    /// sample with an attitude, s (a vehicle launched submerged, a GPS that
+    /// never comes); the first position then redraws the position cloud
+    /// around itself. Default 30 (our choice: a surfaced receiver gives a
+    /// fix within seconds).
+    pub position_wait_s: f64,
+    /// σ north and east of the position particles when started at the
+    /// site, m. Default 1000 (as `dr`'s `initial_position_std_m`).
+    pub initial_position_std_m: f64,
     /// Normalised-innovation gate of a DVL velocity (and a GPS velocity):
     /// `Σᵢ (zᵢ − v̂ᵢ)² / (s²ᵢ + σ²)`, `s²ᵢ` the particles' variance, at most
     /// this. Default 16.3 (χ² with 3 degrees of freedom at 99.9 %); 0 off.
@@ -197,6 +207,8 @@ impl Default for AinsPfParams {
             kernel_width: 0.2,
             initial_velocity_std_m_s: 0.1,
             initial_depth_std_m: 0.1,
+            position_wait_s: 30.0,
+            initial_position_std_m: 1000.0,
             velocity_gate_chi2: 16.3,
             position_gate_chi2: 13.8,
             depth_gate_chi2: 10.8,
@@ -263,6 +275,8 @@ pub struct AinsPfConfig {
     pub(super) kernel_width: f64,
     pub(super) initial_velocity_std: f64,
     pub(super) initial_depth_std: f64,
+    pub(super) position_wait_ns: u64,
+    pub(super) initial_position_std: f64,
     pub(super) velocity_gate: f64,
     pub(super) position_gate: f64,
     pub(super) depth_gate: f64,
@@ -424,6 +438,22 @@ impl AinsPfParams {
                 self.initial_velocity_std_m_s,
             )?,
             initial_depth_std: positive("initial_depth_std_m", self.initial_depth_std_m)?,
+            position_wait_ns: ns(in_range(
+                "position_wait_s",
+                self.position_wait_s,
+                0.0,
+                day,
+                false,
+                "[0, 86400]",
+            )?),
+            initial_position_std: in_range(
+                "initial_position_std_m",
+                self.initial_position_std_m,
+                0.0,
+                1e6,
+                true,
+                "(0, 1e6]",
+            )?,
             velocity_gate: gate("velocity_gate_chi2", self.velocity_gate_chi2)?,
             position_gate: gate("position_gate_chi2", self.position_gate_chi2)?,
             depth_gate: gate("depth_gate_chi2", self.depth_gate_chi2)?,

@@ -70,6 +70,8 @@ pub struct AinsPfSnapshot {
     pub last_stamp_ns: u64,
     /// Origin of the position filter's local N/E, rad (latitude, longitude).
     pub origin_rad: [f64; 2],
+    /// The filters started at the site and no position has come since.
+    pub position_from_site: bool,
     /// Velocity filter, NED, m/s.
     pub velocity: ComponentMoments,
     /// The velocity particles' acceleration errors, m/s².
