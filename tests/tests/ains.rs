@@ -21,11 +21,20 @@ fn dr_manifest() -> PathBuf {
     workspace_root().join("launch").join("dr.toml")
 }
 
+/// The surfacing threshold of the dr run, m: low enough that manoeuvre 1's
+/// predicted error passes it in the dive (its predictor reaches about
+/// 15 m by the end).
+const SURFACING_AT: &str = "ains.variants.dr.predictor.surfacing_threshold_m=5";
+
 #[test]
 fn dr_in_the_pipeline_is_deterministic_and_accurate() {
     let wd = Watchdog::new("ains_dr_sim", BOUND);
     let run = |ns: &Namespace| {
-        let out = launch_manifest(&wd, &dr_manifest(), &["--fast", "--namespace", ns.as_str()]);
+        let out = launch_manifest(
+            &wd,
+            &dr_manifest(),
+            &["--fast", "--namespace", ns.as_str(), "--set", SURFACING_AT],
+        );
         assert_eq!(out.code(), Some(0), "{out}");
         out.summary()
     };
@@ -40,6 +49,8 @@ fn dr_in_the_pipeline_is_deterministic_and_accurate() {
                 "--fast",
                 "--namespace",
                 ns.as_str(),
+                "--set",
+                SURFACING_AT,
                 "--record",
                 record.to_str().expect("utf-8 path"),
             ],
@@ -96,6 +107,32 @@ fn dr_in_the_pipeline_is_deterministic_and_accurate() {
         nav["drift_slope_m_per_km"].as_array().map(Vec::len),
         Some(3),
         "{nav}"
+    );
+    // Paper 002's surfacing advisory: the predicted error passed the
+    // threshold in the dive, and the ains said so in `run/events` (the
+    // recording keeps them) and in the solution's advisory bit.
+    let (code, out, err) = nauta_cli(&[
+        "log".as_ref(),
+        "info".as_ref(),
+        record.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(code, Some(0), "{err}");
+    let info: serde_json::Value = serde_json::from_str(&out).expect("log info JSON");
+    let advised: Vec<u64> = info["events"]
+        .as_array()
+        .expect("events")
+        .iter()
+        .filter(|e| e["kind"] == "surfacing_advised")
+        .filter_map(|e| e["stamp_ns"].as_u64())
+        .collect();
+    let (start, end) = (
+        d["start_stamp_ns"].as_u64().expect("start"),
+        d["end_stamp_ns"].as_u64().expect("end"),
+    );
+    assert!(
+        advised.iter().any(|s| (start..end).contains(s)),
+        "no surfacing advisory in the dive {start}..{end} ns: {advised:?}\n{info}"
     );
     let _ = std::fs::remove_file(&record);
 }

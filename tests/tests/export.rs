@@ -221,7 +221,7 @@ fn write_recording(path: &Path) -> Value {
                 vel_std_ned_m_s: [0.05, 0.05, 0.02],
                 predicted_drift_m: 0.01 * t.distance_m,
                 aiding_mode: 1,
-                pad: 0,
+                advisory: 0,
             }),
             s,
         );

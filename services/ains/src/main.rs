@@ -16,8 +16,8 @@ use std::process::ExitCode;
 use anyhow::Context as _;
 use clap::Parser;
 use nauta_estimation::ains::dr::Site;
-use nauta_estimation::ains::{AinsCore, AinsInput, AinsParams, VARIANTS};
-use nauta_messages::{AinsSnapshot, NavSolution, Role};
+use nauta_estimation::ains::{AinsCore, AinsInput, AinsParams, VARIANTS, advisory};
+use nauta_messages::{AinsSnapshot, NavSolution, Role, event_kind};
 use nauta_runtime::process::ProcessArgs;
 use nauta_runtime::{Manifest, Shell, services};
 
@@ -44,6 +44,9 @@ fn main() -> ExitCode {
         )
         .optional_aiding(services::position_fix(), Role::Positioning, AinsInput::Fix)
         .output(services::nav_solution(), |n| Some(NavSolution::from(n)))
+        .advisory(event_kind::SURFACING_ADVISED, "surfacing", |n| {
+            n.advisory & advisory::SURFACE != 0
+        })
         .snapshot(
             services::snapshot(Role::Ains),
             AinsSnapshot::of_state,

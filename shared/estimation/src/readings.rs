@@ -175,8 +175,10 @@ pub struct Nav {
     pub vel_std_ned_m_s: Vector<Ned>,
     /// Predicted accumulated horizontal position error (paper 002), m.
     pub predicted_drift_m: f64,
-    /// Aiding mode bits.
+    /// Aiding mode bits ([`crate::ains::aiding`]).
     pub aiding_mode: u32,
+    /// Advisory bits ([`crate::ains::advisory`]).
+    pub advisory: u32,
 }
 
 /// A checked position fix (`positioning/fix`).

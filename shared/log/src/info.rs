@@ -42,7 +42,8 @@ pub struct ChannelSummary {
 pub struct EventSummary {
     /// Run-clock stamp, ns.
     pub stamp_ns: u64,
-    /// `started`, `ready`, `exited`, `restarted`, `swapped`, `run_ended`.
+    /// `started`, `ready`, `exited`, `restarted`, `swapped`, `run_ended`,
+    /// `surfacing_advised`.
     pub kind: String,
     /// Process name in the manifest.
     pub process: String,
@@ -91,6 +92,7 @@ fn kind_name(kind: u32) -> String {
         event_kind::RESTARTED => "restarted",
         event_kind::SWAPPED => "swapped",
         event_kind::RUN_ENDED => "run_ended",
+        event_kind::SURFACING_ADVISED => "surfacing_advised",
         _ => "unknown",
     }
     .to_owned()

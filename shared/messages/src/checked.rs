@@ -431,6 +431,7 @@ impl TryFrom<&NavSolution> for Nav {
             vel_std_ned_m_s: Vector::from_array(m.vel_std_ned_m_s),
             predicted_drift_m: scalar(T, "predicted_drift_m", m.predicted_drift_m, 0.0, STD_MAX)?,
             aiding_mode: m.aiding_mode,
+            advisory: m.advisory,
         })
     }
 }

@@ -107,6 +107,10 @@ pub mod event_kind {
     pub const SWAPPED: u32 = 5;
     /// The run ended.
     pub const RUN_ENDED: u32 = 6;
+    /// The aided INS advises surfacing: its predicted horizontal error
+    /// passed the manifest's threshold (paper 002's "foresee the moment to
+    /// emerge"); published once per crossing, at the solution's stamp.
+    pub const SURFACING_ADVISED: u32 = 7;
 }
 
 message! {

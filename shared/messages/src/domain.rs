@@ -74,7 +74,7 @@ impl From<&Nav> for NavSolution {
             vel_std_ned_m_s: n.vel_std_ned_m_s.to_array(),
             predicted_drift_m: n.predicted_drift_m,
             aiding_mode: n.aiding_mode,
-            pad: 0,
+            advisory: n.advisory,
         }
     }
 }

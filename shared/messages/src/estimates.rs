@@ -69,8 +69,11 @@ message! {
         /// Aiding mode bits (0 free inertial, 1 DVL, 2 GPS, 4 buoy/acoustic fix,
         /// 8 heading, 16 depth; `nauta_estimation::ains::aiding`).
         pub aiding_mode: u32,
-        /// Zero.
-        pub pad: u32,
+        /// Advisory bits (1: surfacing advised, the predicted horizontal
+        /// error above the manifest's threshold;
+        /// `nauta_estimation::ains::advisory`). Zero in recordings made
+        /// before the bits existed (it was padding, always zero).
+        pub advisory: u32,
     }
 }
 

@@ -140,3 +140,21 @@ pub mod aiding {
     /// Depth gauge.
     pub const DEPTH: u32 = 16;
 }
+
+/// The bits of [`Nav::advisory`] (`NavSolution.advisory` on the wire).
+pub mod advisory {
+    /// Surfacing advised: the solution's predicted horizontal RMS error
+    /// (`predicted_drift_m`) is above the variant's `surfacing_threshold_m`
+    /// (paper 002's embedded use: "foresee the moment to emerge").
+    pub const SURFACE: u32 = 1;
+
+    /// The advisory bits of a solution whose predicted horizontal error is
+    /// `predicted_m`, against `threshold_m`.
+    pub fn surface(predicted_m: f64, threshold_m: f64) -> u32 {
+        if predicted_m > threshold_m {
+            SURFACE
+        } else {
+            0
+        }
+    }
+}

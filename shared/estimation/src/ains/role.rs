@@ -88,15 +88,6 @@ impl AinsCore {
             AinsCore::Ekf(_) => "ekf",
         }
     }
-
-    /// Whether the variant's error prediction says it is time to surface
-    /// (paper 002's embedded use; `dr` only so far).
-    pub fn surfacing_advised(&self) -> bool {
-        match self {
-            AinsCore::Dr(d) => d.surfacing_advised(),
-            AinsCore::Pf(_) | AinsCore::Ekf(_) => false,
-        }
-    }
 }
 
 impl Estimator for AinsCore {

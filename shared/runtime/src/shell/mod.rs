@@ -68,6 +68,15 @@ pub struct Shell<E: Estimator> {
     inputs: Vec<InputDecl<E::Input>>,
     outputs: Vec<OutputDecl<E::Output>>,
     snapshot: Option<SnapshotDecl<E::Snapshot>>,
+    advisories: Vec<Advisory<E::Output>>,
+}
+
+/// A declared advisory: a run event of `kind` whenever `raised` becomes
+/// true of a published output.
+struct Advisory<O> {
+    kind: u32,
+    name: &'static str,
+    raised: fn(&O) -> bool,
 }
 
 impl<E: Estimator> std::fmt::Debug for Shell<E> {
@@ -102,6 +111,7 @@ where
             inputs: Vec::new(),
             outputs: Vec::new(),
             snapshot: None,
+            advisories: Vec::new(),
         }
     }
 
@@ -173,6 +183,22 @@ where
         make: fn(&E::Output) -> Option<M>,
     ) -> Self {
         self.outputs.push(OutputDecl::new(spec, make));
+        self
+    }
+
+    /// An advisory: whenever `raised` becomes true of a published output
+    /// (at the first, or after outputs of which it was false), the shell
+    /// logs a warning naming it and publishes a run event of `kind`
+    /// (`event_kind::SURFACING_ADVISED`, ...) at that output's stamp. The
+    /// output itself carries the flag; the event is for the run's log and
+    /// whoever follows `run/events`. A standby instance announces nothing.
+    pub fn advisory(
+        mut self,
+        kind: u32,
+        name: &'static str,
+        raised: fn(&E::Output) -> bool,
+    ) -> Self {
+        self.advisories.push(Advisory { kind, name, raised });
         self
     }
 
@@ -319,6 +345,8 @@ where
             progress_ns: None,
             ended_stream: false,
             produced: Vec::new(),
+            raised: vec![false; self.advisories.len()],
+            announced: Vec::new(),
         };
         health.state = run.life.state();
 
@@ -376,7 +404,12 @@ where
                     tracing::debug!(publisher = m.publisher.name(), "input ended");
                 }
             }
-            run.process(&mut core, &mut outs, &mut snapshot_out, &mut health, &decls)?;
+            run.process(&mut core, &mut outs, &mut snapshot_out, &mut health, &decls, &self.advisories)?;
+            for (i, stamp) in run.announced.drain(..) {
+                let a = &self.advisories[i];
+                tracing::warn!(advisory = a.name, stamp_ns = stamp, "advisory raised");
+                ctx.announce(a.kind, stamp, 0);
+            }
             for o in outs.iter_mut() {
                 o.flush();
             }
@@ -450,6 +483,10 @@ struct Run<E: Estimator> {
     /// End of stream published.
     ended_stream: bool,
     produced: Vec<E::Output>,
+    /// Per declared advisory: raised by the last published output.
+    raised: Vec<bool>,
+    /// Advisories raised in this wake-up (index, stamp), to announce.
+    announced: Vec<(usize, u64)>,
 }
 
 impl<E: Estimator> Run<E> {
@@ -462,6 +499,7 @@ impl<E: Estimator> Run<E> {
         snapshot_out: &mut Option<Box<dyn SnapshotPort<E::Snapshot>>>,
         health: &mut HealthReporter,
         decls: &[&InputDecl<E::Input>],
+        advisories: &[Advisory<E::Output>],
     ) -> anyhow::Result<()> {
         while let Some((idx, stamp, input)) = self.merge.pop() {
             self.last_stamp = stamp;
@@ -481,6 +519,15 @@ impl<E: Estimator> Run<E> {
                 let s = o.stamp_ns();
                 if !self.life.publishes(s) {
                     continue;
+                }
+                if !self.life.standby {
+                    for (i, a) in advisories.iter().enumerate() {
+                        let up = (a.raised)(o);
+                        if up && !self.raised[i] {
+                            self.announced.push((i, s));
+                        }
+                        self.raised[i] = up;
+                    }
                 }
                 for port in outs.iter_mut() {
                     if port.offer(o, s, self.life.standby)?.is_some() {

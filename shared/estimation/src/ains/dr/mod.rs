@@ -67,8 +67,8 @@ pub use params::{DrConfig, DrParams, DrParamsError};
 pub use snapshot::{DrSnapshot, DrSnapshotError, DrStats, MAX_PENDING_DVL, NavState};
 
 use crate::ains::AinsInput;
-use crate::ains::aiding;
 use crate::ains::tare::DepthTare;
+use crate::ains::{advisory, aiding};
 use crate::attitude::wrap_pi;
 use crate::earth::normal_gravity;
 use crate::frames::{Frd, Rotation, Vector};
@@ -465,6 +465,11 @@ impl DeadReckoning {
             vel_std_ned_m_s: Vector::from_array(self.predictor.velocity_std_m_s(&m)),
             predicted_drift_m: self.predictor.horizontal_rms_m(),
             aiding_mode: mode,
+            advisory: if self.predictor.surfacing_advised() {
+                advisory::SURFACE
+            } else {
+                0
+            },
         }
     }
 }

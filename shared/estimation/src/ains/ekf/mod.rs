@@ -89,9 +89,9 @@ pub use snapshot::{
 use nalgebra::{Matrix2, SMatrix, UnitQuaternion, Vector3};
 
 use crate::ains::AinsInput;
-use crate::ains::aiding;
 use crate::ains::dr::Site;
 use crate::ains::tare::DepthTare;
+use crate::ains::{advisory, aiding};
 use crate::attitude::wrap_pi;
 use crate::frames::{Frd, Ned, Rotation, Vector};
 use crate::readings::{Ahrs, Attitude, Depth, Dvl, Fix, Gps, Imu, Nav};
@@ -641,6 +641,7 @@ impl Ekf {
             }
         }
         let sd = |i: usize| f.p[(i, i)].max(0.0).sqrt();
+        let drift = (f.p[(POS, POS)] + f.p[(POS + 1, POS + 1)]).max(0.0).sqrt();
         Nav {
             stamp_ns: t,
             lat_rad: f.nav.lat_rad,
@@ -650,8 +651,9 @@ impl Ekf {
             attitude: Some(f.nav.q_nb),
             pos_std_ned_m: Vector::new(sd(POS), sd(POS + 1), sd(POS + 2)),
             vel_std_ned_m_s: Vector::new(sd(VEL), sd(VEL + 1), sd(VEL + 2)),
-            predicted_drift_m: (f.p[(POS, POS)] + f.p[(POS + 1, POS + 1)]).max(0.0).sqrt(),
+            predicted_drift_m: drift,
             aiding_mode: mode,
+            advisory: advisory::surface(drift, self.config.surfacing_threshold),
         }
     }
 }

@@ -48,6 +48,11 @@ pub struct EkfParams {
     /// Initial σ north and east when started at the site, m. Default 1000
     /// (as `dr`).
     pub initial_position_std_m: f64,
+    /// The surfacing advisory ([`crate::ains::advisory::SURFACE`], and the
+    /// shell's `surfacing_advised` run event) is raised while
+    /// `predicted_drift_m`, the covariance's horizontal RMS, is above this,
+    /// m. Default 50 (as `dr`'s predictor).
+    pub surfacing_threshold_m: f64,
     /// Initial roll and pitch σ when the AHRS initialises the attitude,
     /// rad. Default 0.0087 (0.5°).
     pub initial_tilt_std_rad: f64,
@@ -151,6 +156,7 @@ impl Default for EkfParams {
             initial_velocity_std_m_s: 0.5,
             position_wait_s: 30.0,
             initial_position_std_m: 1000.0,
+            surfacing_threshold_m: 50.0,
             initial_tilt_std_rad: 0.0087,
             heading_bias_std_rad: 0.035,
             heading_bias_time_s: 600.0,
@@ -217,6 +223,7 @@ pub struct EkfConfig {
     pub(super) initial_velocity_std: f64,
     pub(super) position_wait_ns: u64,
     pub(super) initial_position_std: f64,
+    pub(super) surfacing_threshold: f64,
     pub(super) initial_tilt_std: f64,
     pub(super) heading_bias_std: f64,
     pub(super) heading_bias_time_s: f64,
@@ -320,6 +327,14 @@ impl EkfParams {
                 1e6,
                 true,
                 "(0, 1e6]",
+            )?,
+            surfacing_threshold: in_range(
+                "surfacing_threshold_m",
+                self.surfacing_threshold_m,
+                0.0,
+                1e7,
+                true,
+                "(0, 1e7]",
             )?,
             initial_tilt_std: angle("initial_tilt_std_rad", self.initial_tilt_std_rad)?,
             heading_bias_std: in_range(

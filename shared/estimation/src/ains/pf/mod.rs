@@ -125,9 +125,9 @@ pub use params::{AinsPfConfig, AinsPfParams, AinsPfParamsError, MAX_PARTICLES};
 pub use snapshot::{AinsPfSnapshot, AinsPfSnapshotError, AinsPfStats, ComponentMoments, GateStats};
 
 use crate::ains::AinsInput;
-use crate::ains::aiding;
 use crate::ains::dr::Site;
 use crate::ains::tare::DepthTare;
+use crate::ains::{advisory, aiding};
 use crate::attitude::wrap_pi;
 use crate::frames::{Frd, Ned, Rotation, Vector};
 use crate::local::flat;
@@ -682,6 +682,7 @@ impl ParticleAins {
             vel_std_ned_m_s: Vector::from_array(self.vel.var().map(f64::sqrt)),
             predicted_drift_m: (pv[0] + pv[1]).sqrt(),
             aiding_mode: mode,
+            advisory: advisory::surface((pv[0] + pv[1]).sqrt(), self.config.surfacing_threshold),
         }
     }
 

@@ -145,6 +145,11 @@ pub struct AinsPfParams {
     /// σ north and east of the position particles when started at the
     /// site, m. Default 1000 (as `dr`'s `initial_position_std_m`).
     pub initial_position_std_m: f64,
+    /// The surfacing advisory ([`crate::ains::advisory::SURFACE`], and the
+    /// shell's `surfacing_advised` run event) is raised while
+    /// `predicted_drift_m`, the covariance's horizontal RMS, is above this,
+    /// m. Default 50 (as `dr`'s predictor).
+    pub surfacing_threshold_m: f64,
     /// Normalised-innovation gate of a DVL velocity (and a GPS velocity):
     /// `Σᵢ (zᵢ − v̂ᵢ)² / (s²ᵢ + σ²)`, `s²ᵢ` the particles' variance, at most
     /// this. Default 16.3 (χ² with 3 degrees of freedom at 99.9 %); 0 off.
@@ -209,6 +214,7 @@ impl Default for AinsPfParams {
             initial_depth_std_m: 0.1,
             position_wait_s: 30.0,
             initial_position_std_m: 1000.0,
+            surfacing_threshold_m: 50.0,
             velocity_gate_chi2: 16.3,
             position_gate_chi2: 13.8,
             depth_gate_chi2: 10.8,
@@ -277,6 +283,7 @@ pub struct AinsPfConfig {
     pub(super) initial_depth_std: f64,
     pub(super) position_wait_ns: u64,
     pub(super) initial_position_std: f64,
+    pub(super) surfacing_threshold: f64,
     pub(super) velocity_gate: f64,
     pub(super) position_gate: f64,
     pub(super) depth_gate: f64,
@@ -453,6 +460,14 @@ impl AinsPfParams {
                 1e6,
                 true,
                 "(0, 1e6]",
+            )?,
+            surfacing_threshold: in_range(
+                "surfacing_threshold_m",
+                self.surfacing_threshold_m,
+                0.0,
+                1e7,
+                true,
+                "(0, 1e7]",
             )?,
             velocity_gate: gate("velocity_gate_chi2", self.velocity_gate_chi2)?,
             position_gate: gate("position_gate_chi2", self.position_gate_chi2)?,
