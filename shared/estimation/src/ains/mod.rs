@@ -10,11 +10,14 @@
 //! - [`ekf`]: an error-state Kalman filter of the INS errors and the heading
 //!   source's.
 //! - [`tare`]: the depth gauge's offset, tared at the surface (every variant).
+//! - [`seed`]: the solution every variant's state holds, for a swap from one
+//!   variant to another.
 
 pub mod dr;
 pub mod ekf;
 pub mod pf;
 pub mod role;
+pub mod seed;
 pub mod tare;
 
 pub use role::{AinsCore, AinsParams, AinsState, VARIANTS};

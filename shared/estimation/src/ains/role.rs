@@ -9,6 +9,7 @@ use crate::ains::AinsInput;
 use crate::ains::dr::{DeadReckoning, DrParams, DrSnapshot, Site};
 use crate::ains::ekf::{Ekf, EkfParams, EkfSnapshot};
 use crate::ains::pf::{AinsPfParams, AinsPfSnapshot, ParticleAins};
+use crate::ains::seed::NavSeed;
 use crate::readings::Nav;
 use crate::role::{Estimator, EstimatorError};
 
@@ -39,7 +40,8 @@ pub enum AinsCore {
 
 /// The state of an aided INS instance, for a warm restart or a hot swap.
 /// `dr` and `ekf` continue bit for bit; `pf` from its filters' moments (its
-/// particles do not fit a snapshot: the cloud is redrawn).
+/// particles do not fit a snapshot: the cloud is redrawn). Another
+/// variant continues from the solution the state holds ([`NavSeed`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum AinsState {
     /// A `pf` instance's state.
@@ -59,6 +61,18 @@ pub enum AinsState {
 }
 
 impl AinsState {
+    /// The solution this state holds, for another variant to continue from
+    /// (`None` for a state that fails its checks, an `ekf` not yet
+    /// initialised, or an unreadable one).
+    pub fn seed(&self) -> Option<NavSeed> {
+        match self {
+            AinsState::Pf(s) => NavSeed::from_pf(s),
+            AinsState::Dr(s) => NavSeed::from_dr(s),
+            AinsState::Ekf(s) => NavSeed::from_ekf(s),
+            AinsState::Unreadable { .. } => None,
+        }
+    }
+
     /// The variant this state belongs to.
     pub fn variant(&self) -> &str {
         match self {
@@ -123,16 +137,28 @@ impl Estimator for AinsCore {
             EstimatorError::new(
                 "snapshot-variant",
                 format!(
-                    "a {own} instance continues only from a {own} snapshot, not from a {} one",
+                    "a {own} instance cannot continue from the {} snapshot: it holds no valid solution yet",
                     state.variant(),
                 ),
             )
         };
         match (&mut *self, state) {
-            (AinsCore::Pf(p), AinsState::Pf(s)) => p.restore(s, stamp_ns),
-            (AinsCore::Dr(d), AinsState::Dr(s)) => d.restore(s, stamp_ns),
-            (AinsCore::Ekf(e), AinsState::Ekf(s)) => e.restore(s, stamp_ns),
-            _ => Err(mismatch()),
+            (AinsCore::Pf(p), AinsState::Pf(s)) => return p.restore(s, stamp_ns),
+            (AinsCore::Dr(d), AinsState::Dr(s)) => return d.restore(s, stamp_ns),
+            (AinsCore::Ekf(e), AinsState::Ekf(s)) => return e.restore(s, stamp_ns),
+            _ => {}
+        }
+        // Another variant's state: continue from its solution.
+        let seed = state.seed().ok_or_else(mismatch)?;
+        tracing::info!(
+            from = state.variant(),
+            to = own,
+            "continuing from the other variant's solution (position, velocity, attitude and their σ)"
+        );
+        match self {
+            AinsCore::Pf(p) => p.start_from(&seed, stamp_ns),
+            AinsCore::Dr(d) => d.start_from(&seed, stamp_ns),
+            AinsCore::Ekf(e) => e.start_from(&seed, stamp_ns),
         }
     }
 }

@@ -15,6 +15,7 @@
 
 mod encoded_size;
 mod harness;
+mod swap;
 
 use encoded_size::encoded_size;
 use harness::*;

@@ -67,6 +67,7 @@ pub use params::{DrConfig, DrParams, DrParamsError};
 pub use snapshot::{DrSnapshot, DrSnapshotError, DrStats, MAX_PENDING_DVL, NavState};
 
 use crate::ains::AinsInput;
+use crate::ains::seed::NavSeed;
 use crate::ains::tare::DepthTare;
 use crate::ains::{advisory, aiding};
 use crate::attitude::wrap_pi;
@@ -146,6 +147,61 @@ impl DeadReckoning {
             predictor: ErrorPredictor::new(config.predictor, config.initial_position_std_m),
             skip_until_ns: None,
         })
+    }
+
+    /// Continues from another variant's solution (a swap across variants,
+    /// [`crate::ains::seed`]) after its input stamped `stamp_ns`: eq. 1's
+    /// origin at the seed's position, its velocity (in the body frame
+    /// through its attitude) until the next DVL sample, the predictor's
+    /// position variance the seed's, its sensor error states at their
+    /// priors (paper 002 eqs. 14-17's δv_b and δΘ, as at the start).
+    pub fn start_from(&mut self, seed: &NavSeed, stamp_ns: u64) -> Result<(), EstimatorError> {
+        let refused = |what: &str| err("snapshot-refused", what);
+        if !seed.is_valid() {
+            return Err(refused("the other variant's solution is not one"));
+        }
+        let euler = match seed.attitude_wxyz {
+            Some(q) => Some(
+                Rotation::<crate::frames::Frd, crate::frames::Ned>::from_wxyz(q)
+                    .map_err(|e| refused(&e.to_string()))?
+                    .euler(),
+            ),
+            None => None,
+        };
+        let v_body = euler.map_or([0.0; 3], |(r, p, y)| {
+            let q = crate::attitude::from_euler(r, p, y);
+            let v = q.inverse_transform_vector(&nalgebra::Vector3::from(seed.vel_ned_m_s));
+            [v.x, v.y, v.z]
+        });
+        // The sensors' error states at their priors (a fresh predictor's),
+        // the position's variance the seed's.
+        let mut cov = ErrorPredictor::new(self.config.predictor, 0.0).covariance();
+        for (i, s) in seed.pos_std_ned_m.iter().enumerate() {
+            cov[i][i] = s * s;
+        }
+        let mut predictor = self.predictor.clone();
+        predictor
+            .set_covariance(&cov)
+            .map_err(|e| refused(&e.to_string()))?;
+        self.predictor = predictor;
+        self.nav = NavState {
+            last_stamp_ns: Some(stamp_ns),
+            origin_rad: [seed.lat_rad, seed.lon_rad],
+            p_ned_m: [0.0, 0.0, seed.depth_m],
+            v_body_m_s: v_body,
+            v_ned_m_s: seed.vel_ned_m_s,
+            last_step_ns: None,
+            euler_rad: euler.map(|(r, p, y)| [r, p, y]),
+            last_ahrs_ns: None,
+            last_dvl_aid_ns: None,
+            pending_dvl: [None; MAX_PENDING_DVL],
+            last_gps_ns: None,
+            last_depth_ns: None,
+            stats: DrStats::default(),
+        };
+        self.tare.set_state(seed.tare);
+        self.skip_until_ns = Some(stamp_ns);
+        Ok(())
     }
 
     /// The surfacing advisory (paper 002: "foresee the moment to emerge"):

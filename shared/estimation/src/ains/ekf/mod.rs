@@ -78,6 +78,7 @@ pub mod filter;
 pub mod measurements;
 pub mod model;
 mod params;
+mod seed;
 mod snapshot;
 pub mod update;
 

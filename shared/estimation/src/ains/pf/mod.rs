@@ -117,6 +117,7 @@ mod gate;
 mod noise;
 mod params;
 mod resampling;
+mod seed;
 mod snapshot;
 
 pub use attitude::AttitudeTrack;
