@@ -126,6 +126,8 @@ fn clean_feed() -> Vec<Vec<Msg>> {
 struct Outcome {
     nav: Vec<NavSolution>,
     health: Health,
+    /// The process's log (standard error).
+    log: String,
 }
 
 /// What the test has seen of the ains so far.
@@ -294,6 +296,7 @@ fn run(wd: &Watchdog, variant: &str, feed: &[Vec<Msg>]) -> Outcome {
     );
     let out = child.wait(wd);
     assert_eq!(out.code(), Some(0), "{out}");
+    let log = out.stderr.clone();
     drop((imu, dvl, depth, gps, ahrs, sensor_progress));
     drop((att, att_progress, fix, fix_progress));
     drop((events, nav_sub, health_sub, progress_sub));
@@ -303,6 +306,7 @@ fn run(wd: &Watchdog, variant: &str, feed: &[Vec<Msg>]) -> Outcome {
     Outcome {
         nav: seen.nav,
         health: seen.health.expect("a health report"),
+        log,
     }
 }
 
@@ -366,6 +370,7 @@ fn spoiled(
 /// Runs the spoiled feed and compares it with the clean run.
 fn refused_and_counted(
     name: &str,
+    service: &str,
     which: fn(&Msg) -> bool,
     non_finite: Spoil,
     out_of_range: Spoil,
@@ -382,6 +387,17 @@ fn refused_and_counted(
         "{name}: every bad message refused and counted once"
     );
     assert_eq!(got.nav.len(), good.nav.len(), "{name}: solutions");
+    // The last log line counts the refusals per input and kind.
+    let done = got
+        .log
+        .lines()
+        .rev()
+        .find(|l| l.contains("rejected_by_kind"))
+        .unwrap_or_else(|| panic!("{name}: no final counts in the log:\n{}", got.log));
+    assert!(
+        done.contains(service),
+        "{name}: {service} not among the counts: {done}"
+    );
     for (a, b) in got.nav.iter().zip(&good.nav) {
         let same = a.header.stamp_ns == b.header.stamp_ns
             && a.lat_rad.to_bits() == b.lat_rad.to_bits()
@@ -406,6 +422,7 @@ fn sensor(m: &mut Msg) -> &mut SensorMessage {
 fn bad_imu_samples_are_refused_and_counted() {
     refused_and_counted(
         "bad_imu",
+        "sensor/imu",
         |m| matches!(m, Msg::Sensor(SensorMessage::Imu(_))),
         |m| {
             if let SensorMessage::Imu(s) = sensor(m) {
@@ -424,6 +441,7 @@ fn bad_imu_samples_are_refused_and_counted() {
 fn bad_dvl_samples_are_refused_and_counted() {
     refused_and_counted(
         "bad_dvl",
+        "sensor/dvl",
         |m| matches!(m, Msg::Sensor(SensorMessage::Dvl(_))),
         |m| {
             if let SensorMessage::Dvl(s) = sensor(m) {
@@ -442,6 +460,7 @@ fn bad_dvl_samples_are_refused_and_counted() {
 fn bad_depth_samples_are_refused_and_counted() {
     refused_and_counted(
         "bad_depth",
+        "sensor/depth",
         |m| matches!(m, Msg::Sensor(SensorMessage::Depth(_))),
         |m| {
             if let SensorMessage::Depth(s) = sensor(m) {
@@ -460,6 +479,7 @@ fn bad_depth_samples_are_refused_and_counted() {
 fn bad_gps_fixes_are_refused_and_counted() {
     refused_and_counted(
         "bad_gps",
+        "sensor/gps",
         |m| matches!(m, Msg::Sensor(SensorMessage::Gps(_))),
         |m| {
             if let SensorMessage::Gps(s) = sensor(m) {
@@ -478,6 +498,7 @@ fn bad_gps_fixes_are_refused_and_counted() {
 fn bad_ahrs_samples_are_refused_and_counted() {
     refused_and_counted(
         "bad_ahrs",
+        "sensor/ahrs",
         |m| matches!(m, Msg::Sensor(SensorMessage::Ahrs(_))),
         |m| {
             if let SensorMessage::Ahrs(s) = sensor(m) {
@@ -496,6 +517,7 @@ fn bad_ahrs_samples_are_refused_and_counted() {
 fn bad_attitude_estimates_are_refused_and_counted() {
     refused_and_counted(
         "bad_attitude",
+        "attitude/estimate",
         |m| matches!(m, Msg::Attitude(_)),
         |m| {
             if let Msg::Attitude(a) = m {
@@ -514,6 +536,7 @@ fn bad_attitude_estimates_are_refused_and_counted() {
 fn bad_position_fixes_are_refused_and_counted() {
     refused_and_counted(
         "bad_fix",
+        "positioning/fix",
         |m| matches!(m, Msg::Fix(_)),
         |m| {
             if let Msg::Fix(f) = m {

@@ -1,7 +1,8 @@
 //! The 1 Hz health message and the counters behind it (DESIGN §4): inputs,
-//! outputs, rejected, dropped. A rejection is logged once per kind and input.
+//! outputs, rejected, dropped. A rejection is logged once per kind and input,
+//! and counted per kind and input for the process's last log line.
 
-use std::collections::BTreeSet;
+use std::collections::BTreeMap;
 
 use nauta_messages::checked::ValidationError;
 use nauta_messages::{Header, Health, to_fixed_str};
@@ -26,7 +27,8 @@ pub struct HealthReporter {
     pub last_stamp_ns: u64,
     /// `state::*` value.
     pub state: u32,
-    logged: BTreeSet<(String, &'static str)>,
+    /// Rejections per (input service, kind).
+    by_kind: BTreeMap<(String, &'static str), u64>,
 }
 
 impl HealthReporter {
@@ -40,14 +42,13 @@ impl HealthReporter {
             dropped: 0,
             last_stamp_ns: 0,
             state: nauta_messages::state::STARTING,
-            logged: BTreeSet::new(),
+            by_kind: BTreeMap::new(),
         })
     }
 
     /// Counts a rejected message, logging the first of each kind per service.
     pub fn reject(&mut self, service: &str, error: &ValidationError) {
-        self.rejected += 1;
-        if self.logged.insert((service.to_owned(), error.kind())) {
+        if self.count(service, error.kind()) {
             tracing::warn!(service, kind = error.kind(), %error, "rejected input (further ones of this kind are only counted)");
         }
     }
@@ -55,10 +56,28 @@ impl HealthReporter {
     /// Counts an input the estimator refused (its state kept), logging the
     /// first of each kind per service.
     pub fn refuse(&mut self, service: &str, kind: &'static str, detail: &dyn std::fmt::Display) {
-        self.rejected += 1;
-        if self.logged.insert((service.to_owned(), kind)) {
+        if self.count(service, kind) {
             tracing::warn!(service, kind, %detail, "input refused by the estimator (further ones of this kind are only counted)");
         }
+    }
+
+    /// Counts one rejection; true for the first of its kind and service.
+    fn count(&mut self, service: &str, kind: &'static str) -> bool {
+        self.rejected += 1;
+        let n = self.by_kind.entry((service.to_owned(), kind)).or_insert(0);
+        *n += 1;
+        *n == 1
+    }
+
+    /// The rejections per input and kind, `service kind count` joined by
+    /// `, ` (empty when none): `sensor/dvl dvl-spike 12, sensor/gps
+    /// gps-gated 3`.
+    pub fn rejected_by_kind(&self) -> String {
+        self.by_kind
+            .iter()
+            .map(|((service, kind), n)| format!("{service} {kind} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// Publishes the health message now.

@@ -439,6 +439,7 @@ where
             inputs = health.inputs,
             outputs = health.outputs,
             rejected = health.rejected,
+            rejected_by_kind = %health.rejected_by_kind(),
             gaps = ports.iter().map(|p| p.gaps()).sum::<u64>(),
             by_signal = exit == LoopExit::Signal,
             "done"
