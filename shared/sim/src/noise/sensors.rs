@@ -232,7 +232,9 @@ impl DvlNoise {
 /// r̃ = ĉ t̃,                   ĉ = c (1 + e_c)    (assumed sound speed, m/s)
 /// ```
 ///
-/// so a sound-speed error e_c scales every range by (1 + e_c).
+/// so a sound-speed error e_c scales every range by (1 + e_c). A multipath
+/// message (probability p_mp, its own random stream) adds δ ~ U[δ_lo, δ_hi]
+/// to t̃.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModemSpec {
@@ -245,6 +247,19 @@ pub struct ModemSpec {
     /// Relative error e_c of the sound speed the receiver assumes (default
     /// 0.003, i.e. 4.5 m/s, our choice); must be > −1.
     pub sound_speed_error: f64,
+    /// Probability a received message came by a longer path (a reflection
+    /// off the surface or the bottom, as the LBL model's late replies)
+    /// (default 0: the paper's case; issue 14's robustness case 0.02).
+    #[serde(default)]
+    pub multipath_probability: f64,
+    /// Its extra travel time, uniform in [δ_lo, δ_hi], s (default
+    /// [0.0133, 0.133]: +20 to +200 m at 1500 m/s, our choice).
+    #[serde(default = "default_modem_multipath_delay")]
+    pub multipath_delay: [f64; 2],
+}
+
+fn default_modem_multipath_delay() -> [f64; 2] {
+    [0.0133, 0.133]
 }
 
 impl Default for ModemSpec {
@@ -254,6 +269,8 @@ impl Default for ModemSpec {
             clock_jitter_sigma: 1e-3,
             sound_speed: 1500.0,
             sound_speed_error: 0.003,
+            multipath_probability: 0.0,
+            multipath_delay: default_modem_multipath_delay(),
         }
     }
 }
@@ -266,6 +283,12 @@ impl ModemSpec {
         check_positive("modem.sound_speed", self.sound_speed)?;
         check_finite("modem.sound_speed_error", self.sound_speed_error)?;
         check_positive("modem 1 + sound_speed_error", 1.0 + self.sound_speed_error)?;
+        check_probability("modem.multipath_probability", self.multipath_probability)?;
+        check_interval(
+            "modem.multipath_delay",
+            self.multipath_delay[0],
+            self.multipath_delay[1],
+        )?;
         Ok(())
     }
 }
@@ -284,8 +307,20 @@ pub struct ModemReception {
 pub enum ModemOutcome {
     /// The message did not arrive.
     Lost,
-    /// The message arrived.
+    /// The message arrived by the direct path.
     Received(ModemReception),
+    /// The message arrived by a longer path (its time of flight too long).
+    Multipath(ModemReception),
+}
+
+impl ModemOutcome {
+    /// The reception, if any (the receiver cannot tell the paths apart).
+    pub fn reception(&self) -> Option<ModemReception> {
+        match self {
+            Self::Received(r) | Self::Multipath(r) => Some(*r),
+            Self::Lost => None,
+        }
+    }
 }
 
 /// Acoustic modem error generator; see [`ModemSpec`].
@@ -306,17 +341,34 @@ impl ModemNoise {
         &self.spec
     }
 
-    /// One message over a true range `range` (m).
-    pub fn next<R: Rng + ?Sized>(&mut self, rng: &mut R, range: f64) -> ModemOutcome {
-        if chance(rng, self.spec.loss_probability) {
+    /// One message over a true range `range` (m): loss and jitter from
+    /// `rng`, the multipath from `multipath_rng` (its own stream: a run
+    /// with multipath differs from one without only by its outliers; both
+    /// draws are made for every message, so the outliers do not depend on
+    /// the losses either).
+    pub fn next<R: Rng + ?Sized, M: Rng + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        multipath_rng: &mut M,
+        range: f64,
+    ) -> ModemOutcome {
+        let s = &self.spec;
+        let multipath = chance(multipath_rng, s.multipath_probability);
+        let delay = uniform(multipath_rng, s.multipath_delay[0], s.multipath_delay[1]);
+        if chance(rng, s.loss_probability) {
             return ModemOutcome::Lost;
         }
-        let s = &self.spec;
-        let tof = (range / s.sound_speed + s.clock_jitter_sigma * std_normal(rng)).max(0.0);
-        ModemOutcome::Received(ModemReception {
+        let extra = if multipath { delay } else { 0.0 };
+        let tof = (range / s.sound_speed + extra + s.clock_jitter_sigma * std_normal(rng)).max(0.0);
+        let r = ModemReception {
             time_of_flight: tof,
             range: s.sound_speed * (1.0 + s.sound_speed_error) * tof,
-        })
+        };
+        if multipath {
+            ModemOutcome::Multipath(r)
+        } else {
+            ModemOutcome::Received(r)
+        }
     }
 }
 

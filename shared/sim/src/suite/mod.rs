@@ -94,6 +94,8 @@ mod stream {
     /// GPS velocity noise, apart from the position's (`nauta.GpsFix.v2`
     /// added the velocity; the positions of v1 runs stay as they were).
     pub const GPS_VELOCITY: u64 = 13;
+    /// The modem's multipath outliers, apart from its losses and jitter.
+    pub const MODEM_MULTIPATH: u64 = 14;
 }
 
 fn sensor_rng(seed: u64, stream: u64) -> ChaCha8Rng {
@@ -233,6 +235,7 @@ struct ModemState {
     schedule: Schedule,
     noise: ModemNoise,
     rng: ChaCha8Rng,
+    multipath_rng: ChaCha8Rng,
     buoy_rng: ChaCha8Rng,
     walk: [f64; 2],
     walk_t_s: f64,
@@ -360,6 +363,7 @@ impl SensorSuite {
                 schedule: Schedule::every(config.modem.period_s),
                 noise: ModemNoise::new(spec)?,
                 rng: sensor_rng(seed, stream::MODEM),
+                multipath_rng: sensor_rng(seed, stream::MODEM_MULTIPATH),
                 buoy_rng: sensor_rng(seed, stream::BUOY),
                 walk: [0.0; 2],
                 walk_t_s: 0.0,
@@ -645,21 +649,27 @@ impl SensorSuite {
             };
             let b = s.in_flight.remove(i);
             let range = c * (t_r - b.send_s);
-            match s.noise.next(&mut s.rng, range) {
+            let outcome = s.noise.next(&mut s.rng, &mut s.multipath_rng, range);
+            match outcome {
                 ModemOutcome::Lost => self.stats.modem_lost += 1,
-                ModemOutcome::Received(r) => {
-                    out.modem = Some(BuoyRangeReading {
-                        stamp_ns: stamp_ns(t_r),
-                        buoy_lat_rad: b.lat_rad,
-                        buoy_lon_rad: b.lon_rad,
-                        buoy_depth_m: m.buoy_depth_m,
-                        time_of_flight_s: r.time_of_flight,
-                        sound_speed_m_s: c * (1.0 + m.noise.sound_speed_error),
-                        send_stamp_ns: b.send_ns,
-                        true_range_m: range,
-                        true_buoy_north_east_m: [b.buoy.x, b.buoy.y],
-                    });
-                }
+                ModemOutcome::Multipath(_) => self.stats.modem_multipath += 1,
+                ModemOutcome::Received(_) => {}
+            }
+            // A multipath message keeps the direct path's reception stamp
+            // (its later arrival, 13-133 ms, is 0.02-0.2 m of the vehicle's
+            // motion); its time of flight carries the extra path.
+            if let Some(r) = outcome.reception() {
+                out.modem = Some(BuoyRangeReading {
+                    stamp_ns: stamp_ns(t_r),
+                    buoy_lat_rad: b.lat_rad,
+                    buoy_lon_rad: b.lon_rad,
+                    buoy_depth_m: m.buoy_depth_m,
+                    time_of_flight_s: r.time_of_flight,
+                    sound_speed_m_s: c * (1.0 + m.noise.sound_speed_error),
+                    send_stamp_ns: b.send_ns,
+                    true_range_m: range,
+                    true_buoy_north_east_m: [b.buoy.x, b.buoy.y],
+                });
             }
         }
     }

@@ -231,6 +231,8 @@ pub struct SuiteStats {
     pub modem_sent: u64,
     /// Buoy messages lost.
     pub modem_lost: u64,
+    /// Buoy messages received by a longer path (multipath outliers).
+    pub modem_multipath: u64,
     /// LBL interrogations registered.
     pub lbl_interrogations: u64,
     /// LBL interrogations without reply.

@@ -312,6 +312,43 @@ fn buoy_time_of_flight_matches_geometry() {
     }
 }
 
+/// Multipath on the modem (issue 14): a share of the messages comes with
+/// the extra travel time in [δ_lo, δ_hi]; the others, and the losses, are
+/// those of the run without (the outliers have their own random stream).
+#[test]
+fn modem_multipath_outliers_have_their_own_stream() {
+    let steps = survey_steps();
+    let clean = run(SuiteConfig::survey(), 9, steps);
+    let mut config = SuiteConfig::survey();
+    config.modem.noise.multipath_probability = 0.5;
+    let mp = run(config.clone(), 9, steps);
+    let o = Origin::lisbon();
+    let mut s = SensorSuite::new(config, 9, o, &env(o)).expect("suite");
+    for (t, i) in steps {
+        s.step(t, i).expect("step");
+    }
+    let c = s.sound_speed_m_s();
+    let a: Vec<_> = clean.iter().filter_map(|m| m.modem).collect();
+    let b: Vec<_> = mp.iter().filter_map(|m| m.modem).collect();
+    assert_eq!(a.len(), b.len(), "the same messages arrive");
+    let mut late = 0;
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.send_stamp_ns, y.send_stamp_ns);
+        let extra = y.time_of_flight_s - x.time_of_flight_s;
+        if extra == 0.0 {
+            continue;
+        }
+        late += 1;
+        assert!(
+            (0.0133..=0.133).contains(&extra),
+            "extra travel time {extra} s ({} m)",
+            extra * c
+        );
+    }
+    assert_eq!(late as u64, s.stats().modem_multipath);
+    assert!(late > 0 && late < a.len(), "{late} of {} late", a.len());
+}
+
 /// (ask log (id, stamp), replies with their delivery stamp, the steps).
 type ClosedLoop = (Vec<(u32, u64)>, Vec<(LblReplyReading, u64)>, &'static Steps);
 

@@ -139,14 +139,16 @@ fn modem_loss_rate_jitter_and_sound_speed() {
     let spec = ModemSpec::default();
     let mut modem = ModemNoise::new(spec).expect("spec");
     let mut r = rng(9);
+    let mut mp = rng(90);
     let range = 800.0;
     let n = 120_000;
     let mut lost = 0;
     let mut tof_err = Vec::new();
     let mut range_ratio = Vec::new();
     for _ in 0..n {
-        match modem.next(&mut r, range) {
+        match modem.next(&mut r, &mut mp, range) {
             ModemOutcome::Lost => lost += 1,
+            ModemOutcome::Multipath(_) => panic!("no multipath by default"),
             ModemOutcome::Received(m) => {
                 tof_err.push(m.time_of_flight - range / spec.sound_speed);
                 range_ratio.push(m.range / range);
@@ -284,8 +286,9 @@ fn same_seed_same_series_other_seed_differs() {
     }
     fn modem(seed: u64) -> Vec<ModemOutcome> {
         let mut r = rng(seed);
+        let mut mp = rng(seed + 1000);
         let mut m = ModemNoise::new(ModemSpec::default()).expect("spec");
-        (0..2000).map(|_| m.next(&mut r, 500.0)).collect()
+        (0..2000).map(|_| m.next(&mut r, &mut mp, 500.0)).collect()
     }
     fn depth_mag(seed: u64) -> Vec<f64> {
         let mut r = rng(seed);
