@@ -127,21 +127,7 @@ impl DeadReckoning {
         Ok(Self {
             config,
             declination_rad: site.declination_rad,
-            nav: NavState {
-                last_stamp_ns: None,
-                origin_rad: [site.lat_rad, site.lon_rad],
-                p_ned_m: [0.0; 3],
-                v_body_m_s: [0.0; 3],
-                v_ned_m_s: [0.0; 3],
-                last_step_ns: None,
-                euler_rad: None,
-                last_ahrs_ns: None,
-                last_dvl_aid_ns: None,
-                pending_dvl: [None; MAX_PENDING_DVL],
-                last_gps_ns: None,
-                last_depth_ns: None,
-                stats: DrStats::default(),
-            },
+            nav: NavState::at([site.lat_rad, site.lon_rad]),
             spike: SpikeFilter::new(config.spike),
             tare: DepthTare::new(config.tare_samples),
             predictor: ErrorPredictor::new(config.predictor, config.initial_position_std_m),
@@ -186,18 +172,11 @@ impl DeadReckoning {
         self.predictor = predictor;
         self.nav = NavState {
             last_stamp_ns: Some(stamp_ns),
-            origin_rad: [seed.lat_rad, seed.lon_rad],
             p_ned_m: [0.0, 0.0, seed.depth_m],
             v_body_m_s: v_body,
             v_ned_m_s: seed.vel_ned_m_s,
-            last_step_ns: None,
             euler_rad: euler.map(|(r, p, y)| [r, p, y]),
-            last_ahrs_ns: None,
-            last_dvl_aid_ns: None,
-            pending_dvl: [None; MAX_PENDING_DVL],
-            last_gps_ns: None,
-            last_depth_ns: None,
-            stats: DrStats::default(),
+            ..NavState::at([seed.lat_rad, seed.lon_rad])
         };
         self.tare.set_state(seed.tare);
         self.skip_until_ns = Some(stamp_ns);

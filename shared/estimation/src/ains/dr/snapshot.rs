@@ -67,6 +67,28 @@ pub struct NavState {
     pub stats: DrStats,
 }
 
+impl NavState {
+    /// The state before any input, eq. 1's origin at `origin_rad`
+    /// (latitude, longitude, rad), at rest there.
+    pub fn at(origin_rad: [f64; 2]) -> Self {
+        Self {
+            last_stamp_ns: None,
+            origin_rad,
+            p_ned_m: [0.0; 3],
+            v_body_m_s: [0.0; 3],
+            v_ned_m_s: [0.0; 3],
+            last_step_ns: None,
+            euler_rad: None,
+            last_ahrs_ns: None,
+            last_dvl_aid_ns: None,
+            pending_dvl: [None; MAX_PENDING_DVL],
+            last_gps_ns: None,
+            last_depth_ns: None,
+            stats: DrStats::default(),
+        }
+    }
+}
+
 /// Everything another `dr` instance needs to continue bit for bit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DrSnapshot {

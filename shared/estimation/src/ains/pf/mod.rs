@@ -549,42 +549,6 @@ impl ParticleAins {
         }
     }
 
-    /// Without a position `position_wait_s` after the first IMU sample with
-    /// an attitude: the filters start at the site, σ
-    /// `initial_position_std_m` north and east.
-    fn start_at_site_after_waiting(&mut self, t: u64) {
-        let since = *self.waiting_since_ns.get_or_insert(t);
-        if t.saturating_sub(since) < self.config.position_wait_ns {
-            return;
-        }
-        let [lat, lon] = self.site_rad;
-        let s = self.config.initial_position_std;
-        self.initialise(lat, lon, [s, s], t);
-        self.position_from_site = true;
-        tracing::info!(
-            waited_s = t.saturating_sub(since) as f64 * 1e-9,
-            sigma_m = s,
-            "no position came: the pf aided INS starts at the site"
-        );
-    }
-
-    /// The first position after a start at the site: the horizontal
-    /// particles are drawn around it (the origin moves there), the velocity
-    /// and depth kept.
-    fn redraw_horizontal(&mut self, lat: f64, lon: f64, sigma: [f64; 2]) {
-        let c = self.config;
-        let drift = Moments {
-            mean: 0.0,
-            var: c.drift_std * c.drift_std,
-        };
-        for (comp, s) in self.pos.c.iter_mut().zip(sigma) {
-            comp.spread(0.0, s, drift, &mut self.noise);
-        }
-        self.pos.refresh();
-        self.origin_rad = Some([lat, lon]);
-        self.position_from_site = false;
-    }
-
     /// Draws both clouds (module docs) at a first fix `(lat, lon)` of σ
     /// `sigma` (north, east).
     fn initialise(&mut self, lat: f64, lon: f64, sigma: [f64; 2], t: u64) {
