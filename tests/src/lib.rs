@@ -16,7 +16,9 @@ use std::time::{Duration, Instant};
 use nauta_messages::{Role, RunEvent, event_kind, fixed_str};
 use nauta_runtime::{Context, Manifest, Namespace, Subscriber, services};
 
+mod kill;
 mod summary;
+pub use kill::kill_9_after_draining;
 pub use summary::Summary;
 
 // ---------------------------------------------------------------------------

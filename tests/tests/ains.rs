@@ -231,10 +231,7 @@ fn kill_9_and_swap_of_the_ains_keep_every_stamp_exactly_once() {
         std::thread::sleep(Duration::from_millis(5));
     }
     let pid = pid.expect("ains announced ready");
-    // SAFETY: kill(2) on the ains process of this test's own run.
-    unsafe {
-        libc::kill(pid as i32, libc::SIGKILL);
-    }
+    kill_9_after_draining(&wd, pid, || f.poll());
     let killed = Instant::now();
     f.until(&wd, &mut launch, 1, 0);
     eprintln!(

@@ -226,10 +226,7 @@ fn kill_9_of_an_estimator_restarts_it_warm_and_the_rest_keeps_running() {
         .find(|(n, _, i)| n == "attitude" && *i == 0)
         .map(|(_, p, _)| *p)
         .expect("attitude announced ready");
-    // SAFETY: kill(2) on the attitude process of this test's own run.
-    unsafe {
-        libc::kill(pid as i32, libc::SIGKILL);
-    }
+    kill_9_after_draining(&wd, pid, || follower.poll());
     let killed = Instant::now();
     follow_until(&wd, &mut launch, &mut follower, 1, 0);
     eprintln!(

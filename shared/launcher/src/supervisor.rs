@@ -324,7 +324,13 @@ impl Supervisor {
             }
             let code = m.child.code().unwrap_or(-1);
             publish(ctx, event_kind::EXITED, m, code);
-            // Its shared memory goes now, not at a publisher's deadline.
+            // What it published before it died is taken first (a removed
+            // publisher's unread messages are lost to its subscribers, and
+            // `--resume-after` is the last stamp the taps saw); then its
+            // shared memory goes, not at a publisher's deadline.
+            for t in taps.iter_mut() {
+                t.drain(obs)?;
+            }
             let report = ctx.cleanup_dead_nodes();
             tracing::debug!(?report, process = %m.name, "cleaned up after exit");
             if std::mem::take(&mut m.forced) {
