@@ -30,6 +30,8 @@
 //!   aided by gravity and magnetic heading.
 //! - [`pf`]: paper 000's attitude particle filter, with gyro bias estimation,
 //!   disturbance rejection and initialisation from the first samples.
+//! - [`positioning`]: the positioning role's estimator (paper 000 §III-B-2's
+//!   buoy time-of-flight particle filter, and a range-only EKF).
 //! - [`predictor`]: paper 002's error predictor (eqs. 14-17) as the
 //!   covariance of the sensors' errors along the track: `predicted_drift_m`
 //!   and the surfacing advisory.
@@ -56,6 +58,7 @@ pub mod magnetic;
 pub mod mekf;
 pub mod params;
 pub mod pf;
+pub mod positioning;
 pub mod predictor;
 pub mod readings;
 pub mod role;
