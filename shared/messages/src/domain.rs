@@ -103,11 +103,7 @@ impl AinsSnapshot {
             pad: 0,
             state: [[0; 32]; 9],
         };
-        for (i, chunk) in bytes.chunks(8).enumerate() {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            m.state[i / 32][i % 32] = u64::from_le_bytes(word);
-        }
+        pack(&bytes, &mut m.state);
         m
     }
 
@@ -123,20 +119,7 @@ impl AinsSnapshot {
         if len == 0 || len > AINS_STATE_BYTES {
             return unreadable(format!("it holds {len} bytes of state"));
         }
-        let bytes: Vec<u8> = self
-            .state
-            .iter()
-            .flatten()
-            .flat_map(|w| w.to_le_bytes())
-            .take(len)
-            .collect();
-        fn decode<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T, String> {
-            match bincode::serde::decode_from_slice(bytes, codec::config()) {
-                Ok((s, used)) if used == bytes.len() => Ok(s),
-                Ok((_, used)) => Err(format!("{} trailing bytes", bytes.len() - used)),
-                Err(e) => Err(e.to_string()),
-            }
-        }
+        let bytes = unpack(&self.state, len);
         let decoded = match variant.as_str() {
             "dr" => decode(&bytes).map(|s| AinsState::Dr(Box::new(s))),
             "pf" => decode(&bytes).map(|s| AinsState::Pf(Box::new(s))),
@@ -144,6 +127,35 @@ impl AinsSnapshot {
             other => Err(format!("no variant {other:?}")),
         };
         decoded.unwrap_or_else(unreadable)
+    }
+}
+
+/// `bytes` into the words of an opaque snapshot, little-endian, the rest
+/// zero (the caller checked that they fit).
+pub(crate) fn pack<const R: usize>(bytes: &[u8], words: &mut [[u64; 32]; R]) {
+    for (i, chunk) in bytes.chunks(8).enumerate().take(R * 32) {
+        let mut word = [0u8; 8];
+        word[..chunk.len()].copy_from_slice(chunk);
+        words[i / 32][i % 32] = u64::from_le_bytes(word);
+    }
+}
+
+/// The first `len` bytes of an opaque snapshot's words.
+pub(crate) fn unpack(words: &[[u64; 32]], len: usize) -> Vec<u8> {
+    words
+        .iter()
+        .flatten()
+        .flat_map(|w| w.to_le_bytes())
+        .take(len)
+        .collect()
+}
+
+/// A state decoded from all of `bytes` (trailing bytes are an error).
+pub(crate) fn decode<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T, String> {
+    match bincode::serde::decode_from_slice(bytes, codec::config()) {
+        Ok((s, used)) if used == bytes.len() => Ok(s),
+        Ok((_, used)) => Err(format!("{} trailing bytes", bytes.len() - used)),
+        Err(e) => Err(e.to_string()),
     }
 }
 

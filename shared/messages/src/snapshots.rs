@@ -57,24 +57,27 @@ message! {
 }
 
 message! {
-    /// Buoy positioning filter state, summarised as a Gaussian over north/east
-    /// offsets from the reference position.
-    #[wire(type_name = "nauta.PositioningSnapshot.v1", size = 96)]
+    /// Positioning state for a warm restart or a hot swap: the estimator's
+    /// state, bincode-encoded (the codec's configuration) from
+    /// `nauta_estimation::positioning::PositioningState` (the dead-reckoned
+    /// centre, the filter's mean and 4×4 covariance of offset and velocity
+    /// correction, the depth tare, the timers and counters). Both variants
+    /// share the state: the `ekf` continues bit for bit, the `pf` redraws
+    /// its particles from the Gaussian. v1 (a 2×2 Gaussian only) was never
+    /// published: no positioning process existed.
+    #[wire(type_name = "nauta.PositioningSnapshot.v2", size = 568)]
     pub struct PositioningSnapshot {
-        /// Common header.
+        /// Common header; `stamp_ns` is the stamp of the last input processed.
         pub header: Header,
-        /// Latitude of the mean, rad.
-        pub lat_rad: f64,
-        /// Longitude of the mean, rad.
-        pub lon_rad: f64,
-        /// Covariance of north/east position, m², row-major 2×2.
-        pub covariance_ne_m2: [[f64; 2]; 2],
-        /// Effective particle count at the snapshot.
-        pub effective_particles: f64,
-        /// Particles in the filter.
-        pub particles: u32,
+        /// The variant that wrote it (`pf`, `ekf`), NUL-padded.
+        pub variant: [u8; 16],
+        /// Bytes of `state` in use.
+        pub state_len: u32,
         /// Zero.
         pub pad: u32,
+        /// The state: the first `state_len` bytes of these words, each
+        /// little-endian.
+        pub state: [[u64; 32]; 2],
     }
 }
 

@@ -14,7 +14,8 @@
 //!   update; a fix of source [`source::BUOY`]. A refused range changes
 //!   nothing but the walk, and is counted by kind (`gated`).
 //! - Submerged with no range used for `silence_s`: a fix of source
-//!   [`source::NONE`], the centre carried by the velocity alone.
+//!   [`source::NONE`] with the next depth reading, the centre carried by
+//!   the velocity alone.
 
 use crate::ains::tare::{DepthTare, TareState};
 use crate::positioning::ekf::RangeEkf;
@@ -87,6 +88,16 @@ pub struct PositioningState {
     pub next_silence_ns: u64,
     /// The counters.
     pub stats: PositioningStats,
+}
+
+/// What a positioning snapshot message carries: a state, or why it could
+/// not be read (refused on restore).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Saved {
+    /// The state, and the variant that wrote it.
+    State(Box<PositioningState>, String),
+    /// Why the message did not decode.
+    Unreadable(String),
 }
 
 #[derive(Debug, Clone)]
@@ -243,7 +254,7 @@ impl Positioning {
         })
     }
 
-    fn on_nav(&mut self, n: &Nav, out: &mut Vec<Fix>) {
+    fn on_nav(&mut self, n: &Nav) {
         if self.centre.is_none() {
             let s = n.pos_std_ned_m.to_array();
             let hw = self.model.init_half_width_m.max(2.0 * s[0].max(s[1]));
@@ -252,14 +263,6 @@ impl Positioning {
         self.advance_to(n.stamp_ns);
         let v = n.vel_ned_m_s.to_array();
         self.velocity = Some([v[0], v[1]]);
-        if self.submerged() && n.stamp_ns >= self.next_silence_ns {
-            self.next_silence_ns = n.stamp_ns.saturating_add(self.silence_ns());
-            self.apply_walk();
-            if let Some(f) = self.fix(n.stamp_ns, source::NONE) {
-                self.stats.silent_fixes += 1;
-                out.push(f);
-            }
-        }
     }
 
     fn apply_walk(&mut self) {
@@ -274,7 +277,7 @@ impl Positioning {
         }
     }
 
-    fn on_depth(&mut self, d: &Depth) {
+    fn on_depth(&mut self, d: &Depth, out: &mut Vec<Fix>) {
         let near_gps = self
             .last_gps_ns
             .is_some_and(|g| d.stamp_ns.saturating_sub(g) <= SURFACE_GPS_WINDOW_NS);
@@ -284,6 +287,18 @@ impl Positioning {
             self.tare.end_session();
         }
         self.depth = Some(self.tare.depth_m(d.depth_m));
+        // The silence fix comes with a sensor's sample, not the ains's, so
+        // that the role's watermark moves with the sensor's (`ains/nav` is
+        // an aiding input: the cycle ains ↔ positioning waits on neither).
+        if self.submerged() && self.centre.is_some() && d.stamp_ns >= self.next_silence_ns {
+            self.next_silence_ns = d.stamp_ns.saturating_add(self.silence_ns());
+            self.advance_to(d.stamp_ns);
+            self.apply_walk();
+            if let Some(f) = self.fix(d.stamp_ns, source::NONE) {
+                self.stats.silent_fixes += 1;
+                out.push(f);
+            }
+        }
     }
 
     fn on_gps(&mut self, g: &Gps, out: &mut Vec<Fix>) -> Result<(), EstimatorError> {
@@ -430,7 +445,7 @@ impl PositioningState {
 impl Estimator for Positioning {
     type Input = PositioningInput;
     type Output = Fix;
-    type Snapshot = PositioningState;
+    type Snapshot = Saved;
 
     fn on_input(
         &mut self,
@@ -444,11 +459,11 @@ impl Estimator for Positioning {
         self.last_stamp = self.last_stamp.max(stamp);
         match input {
             PositioningInput::Nav(n) => {
-                self.on_nav(n, out);
+                self.on_nav(n);
                 Ok(())
             }
             PositioningInput::Depth(d) => {
-                self.on_depth(d);
+                self.on_depth(d, out);
                 Ok(())
             }
             PositioningInput::Gps(g) => self.on_gps(g, out),
@@ -456,11 +471,21 @@ impl Estimator for Positioning {
         }
     }
 
-    fn snapshot(&self) -> Option<PositioningState> {
+    fn snapshot(&self) -> Option<Saved> {
         self.state()
+            .map(|s| Saved::State(Box::new(s), self.variant().to_string()))
     }
 
-    fn restore(&mut self, s: &PositioningState, stamp_ns: u64) -> Result<(), EstimatorError> {
+    fn restore(&mut self, saved: &Saved, stamp_ns: u64) -> Result<(), EstimatorError> {
+        let s = match saved {
+            Saved::State(s, _) => s,
+            Saved::Unreadable(why) => {
+                return Err(EstimatorError::new(
+                    "snapshot",
+                    format!("an unreadable positioning snapshot: {why}"),
+                ));
+            }
+        };
         if !s.is_valid() {
             return Err(EstimatorError::new(
                 "snapshot",

@@ -22,7 +22,7 @@ pub mod params;
 pub mod pf;
 pub mod process;
 
-pub use self::core::{Positioning, PositioningState, PositioningStats};
+pub use self::core::{Positioning, PositioningState, PositioningStats, Saved};
 pub use params::{PositioningEkfParams, PositioningPfParams, RangeModel};
 
 use crate::readings::{BuoyRangeReading, Depth, Gps, Nav};

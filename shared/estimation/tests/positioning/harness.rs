@@ -71,7 +71,7 @@ pub struct Run {
     /// Every message received.
     pub messages: u64,
     /// The state at `snapshot_at_s`, if asked.
-    pub snapshot: Option<(nauta_estimation::positioning::PositioningState, u64)>,
+    pub snapshot: Option<(nauta_estimation::positioning::Saved, u64)>,
 }
 
 impl Run {

@@ -10,7 +10,7 @@ mod inputs;
 use harness::*;
 use nauta_estimation::Estimator;
 use nauta_estimation::positioning::{
-    Positioning, PositioningEkfParams, PositioningPfParams, source,
+    Positioning, PositioningEkfParams, PositioningPfParams, Saved, source,
 };
 
 const SEED: u64 = 7;
@@ -228,9 +228,15 @@ fn a_restart_from_a_snapshot_continues() {
             h_b < h_a + 2.0,
             "{name}: {h_b} m after the restart, {h_a} m without"
         );
-        // A damaged snapshot is refused and the state kept.
-        let mut bad = state.clone();
+        // A damaged snapshot is refused, as an unreadable one.
+        let Saved::State(good, variant) = &state else {
+            panic!("{state:?}")
+        };
+        let mut bad = good.as_ref().clone();
         bad.offsets.cov[0][0] = f64::NAN;
+        let bad = Saved::State(Box::new(bad), variant.clone());
         assert!(make().restore(&bad, stamp).is_err(), "{name}");
+        let unreadable = Saved::Unreadable("cut".into());
+        assert!(make().restore(&unreadable, stamp).is_err(), "{name}");
     }
 }

@@ -520,7 +520,9 @@ impl Ekf {
     }
 
     fn on_fix(&mut self, x: &Fix, t: u64) {
-        if !self.config.position_aiding {
+        // Only a buoy range's fix is news: the positioning's GPS fixes are
+        // this filter's own GPS, its silent ones its own velocity.
+        if !self.config.position_aiding || x.source != crate::positioning::source::BUOY {
             self.stats.fix_ignored += 1;
             return;
         }

@@ -615,7 +615,9 @@ impl ParticleAins {
     }
 
     fn on_fix(&mut self, f: &Fix, t: u64) {
-        if self.config.position_aiding {
+        // Only a buoy range's fix is news: the positioning's GPS fixes are
+        // this filter's own GPS, its silent ones its own velocity.
+        if self.config.position_aiding && f.source == crate::positioning::source::BUOY {
             self.on_position(f.lat_rad, f.lon_rad, [f.std_north_m, f.std_east_m], FIX, t);
         }
     }
