@@ -29,8 +29,8 @@ use crate::positioning::{
 use crate::readings::{BuoyRangeReading, Depth, Fix, Gps, Nav};
 use crate::role::{Estimator, EstimatorError};
 
-/// Readings the depth tare averages at the surface (1 s at 10 Hz... of the
-/// gauge's rate), as the aided INS's.
+/// Readings the depth tare averages at the surface (2 s of a 10 Hz gauge),
+/// the aided INS's default `tare_samples`.
 const TARE_SAMPLES: u64 = 20;
 /// A depth reading within this of a GPS fix is taken at the surface, ns.
 const SURFACE_GPS_WINDOW_NS: u64 = 1_000_000_000;
@@ -82,8 +82,6 @@ pub struct PositioningState {
     pub last_gps_ns: Option<u64>,
     /// Time since the filter's state was last moved, s.
     pub pending_dt_s: f64,
-    /// The last range used (or the start), ns.
-    pub last_used_ns: Option<u64>,
     /// The next silence fix is due at or after this, ns.
     pub next_silence_ns: u64,
     /// The counters.
@@ -117,11 +115,9 @@ pub struct Positioning {
     tare: DepthTare,
     last_gps_ns: Option<u64>,
     pending_dt: f64,
-    last_used_ns: Option<u64>,
     next_silence_ns: u64,
     stats: PositioningStats,
     resume_after: Option<u64>,
-    last_stamp: u64,
 }
 
 impl Positioning {
@@ -153,11 +149,9 @@ impl Positioning {
             tare: DepthTare::new(TARE_SAMPLES),
             last_gps_ns: None,
             pending_dt: 0.0,
-            last_used_ns: None,
             next_silence_ns: 0,
             stats: PositioningStats::default(),
             resume_after: None,
-            last_stamp: 0,
         }
     }
 
@@ -207,7 +201,6 @@ impl Positioning {
             Filter::Ekf(e) => *e = RangeEkf::new(half_width_m, sc),
         }
         self.pending_dt = 0.0;
-        self.last_used_ns = Some(stamp_ns);
         self.next_silence_ns = stamp_ns.saturating_add(self.silence_ns());
     }
 
@@ -387,7 +380,6 @@ impl Positioning {
         let c = self.centre.as_mut().expect("checked above");
         (c.lat_rad, c.lon_rad) = moved(c.lat_rad, c.lon_rad, by[0], by[1]);
         self.stats.ranges_used += 1;
-        self.last_used_ns = Some(b.stamp_ns);
         self.next_silence_ns = b.stamp_ns.saturating_add(self.silence_ns());
         out.extend(self.fix(b.stamp_ns, source::BUOY));
         Ok(())
@@ -404,7 +396,6 @@ impl Positioning {
             tare: self.tare.state(),
             last_gps_ns: self.last_gps_ns,
             pending_dt_s: self.pending_dt,
-            last_used_ns: self.last_used_ns,
             next_silence_ns: self.next_silence_ns,
             stats: self.stats,
         })
@@ -456,7 +447,6 @@ impl Estimator for Positioning {
         if self.resume_after.is_some_and(|r| stamp <= r) {
             return Ok(());
         }
-        self.last_stamp = self.last_stamp.max(stamp);
         match input {
             PositioningInput::Nav(n) => {
                 self.on_nav(n);
@@ -502,11 +492,9 @@ impl Estimator for Positioning {
         self.tare.set_state(s.tare);
         self.last_gps_ns = s.last_gps_ns;
         self.pending_dt = s.pending_dt_s;
-        self.last_used_ns = s.last_used_ns;
         self.next_silence_ns = s.next_silence_ns;
         self.stats = s.stats;
         self.resume_after = Some(stamp_ns);
-        self.last_stamp = stamp_ns;
         Ok(())
     }
 }
