@@ -509,9 +509,9 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
     };
     // Every variant on the same survey data, the shipped attitude PF
     // feeding `attitude/estimate`; its speed at its shipped particle count
-    // is the attitude figure. No positioning process exists yet, so the run
-    // with position aiding has no fixes to use: `aided` and `unaided` are
-    // the same run until it does.
+    // is the attitude figure. The bench does not run the positioning yet
+    // (issue 14, point 4), so the run with position aiding has no fixes to
+    // use: `aided` and `unaided` are the same run until it does.
     let mut attitude = survey_attitude()?;
     let site7 = site(&survey, survey.sensors_preset(), 7)?;
     let mut cores = variant_cores(site7, false)?;
