@@ -20,15 +20,17 @@ fn complete_manifest() -> std::path::PathBuf {
 fn the_complete_survey_is_deterministic_with_a_fix_per_message() {
     bin_dir();
     let wd = Watchdog::new("positioning_survey", BOUND);
-    let run = |extra: &[&str]| {
+    let run = || {
         let ns = Namespace::unique();
-        let mut args = vec!["--fast", "--namespace", ns.as_str()];
-        args.extend_from_slice(extra);
-        let out = launch_manifest(&wd, &complete_manifest(), &args);
+        let out = launch_manifest(
+            &wd,
+            &complete_manifest(),
+            &["--fast", "--namespace", ns.as_str()],
+        );
         assert_eq!(out.code(), Some(0), "{out}");
         out.summary()
     };
-    let (a, b) = (run(&[]), run(&[]));
+    let (a, b) = (run(), run());
     for stream in ["positioning/fix", "ains/nav"] {
         let d = a
             .digest_of(stream)

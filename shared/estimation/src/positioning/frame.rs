@@ -36,8 +36,6 @@ pub struct RangeFrame {
     r_north: f64,
     r_east: f64,
     radius: f64,
-    /// The buoy north and east of the centre, m.
-    pub buoy_ne_m: [f64; 2],
     obs: RangeObs,
 }
 
@@ -54,7 +52,6 @@ impl RangeFrame {
             r_north: meridian_radius(lat_rad),
             r_east: transverse_radius(lat_rad) * lat_rad.cos(),
             radius: radius_in_azimuth(lat_rad, azimuth),
-            buoy_ne_m: [bn, be],
             obs,
         }
     }

@@ -242,9 +242,4 @@ impl BuoyPf {
             s[1] -= by[1];
         }
     }
-
-    /// The particle count.
-    pub fn particles(&self) -> usize {
-        self.state.len()
-    }
 }
