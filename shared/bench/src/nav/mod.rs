@@ -22,6 +22,9 @@
 //! - `realtime_factor`: mission seconds per second of the estimator's own
 //!   time on the survey (the simulator's time not counted).
 //! - `akit` (with `--akit DIR`): A-KIT's trajectories (module [`akit`]).
+//! - `complete` (alone with `--complete`): the complete system with the
+//!   positioning over seeds 100-109 and issue 14's robustness cases
+//!   (module [`complete`]).
 //!
 //! Every variant takes the shipped survey manifest's parameters. The runs
 //! over seeds share the machine's cores (each is its own seeded run, so the
@@ -57,6 +60,7 @@ use nauta_sim::suite::SuiteConfig;
 use nauta_tools::eval::{self, Data, Metrics};
 
 mod akit;
+pub mod complete;
 
 /// Arguments of `nauta bench nav`.
 #[derive(Debug, clap::Args)]
@@ -72,6 +76,16 @@ pub struct NavArgs {
     /// reckoning on each trajectory.
     #[arg(long, value_name = "DIR")]
     pub akit: Option<std::path::PathBuf>,
+    /// Only the complete system (issue 14: sensor, attitude, ains,
+    /// positioning) over seeds 100-109 (`--quick`: 100-102), its
+    /// robustness cases and the positioning's speed.
+    #[arg(long)]
+    pub complete: bool,
+}
+
+/// The seeds of the complete system's runs (100-199 are the benchmark's).
+fn complete_seeds(quick: bool) -> Vec<u64> {
+    (100..if quick { 103 } else { 110 }).collect()
 }
 
 /// The seeds of the benchmarks over seeds (100-199 are the benchmark's).
@@ -113,6 +127,56 @@ fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// One stamp's inputs of the aided INS in the service's order: the
+/// sensor's, then the attitude estimate of the attitude estimator that runs
+/// on the stamp's IMU sample (when one runs), as the service declares it.
+#[derive(Debug, Default)]
+pub struct StepInputs {
+    inputs: Vec<(u8, AinsInput)>,
+    reports: Vec<<AttitudeCore as Estimator>::Output>,
+    /// IMU samples the attitude estimator took, and the time it spent.
+    pub attitude_samples: u64,
+    pub attitude_spent: Duration,
+}
+
+impl StepInputs {
+    /// The inputs of `wire` (one stamp's messages); `each` sees every
+    /// message first (the truth and GPS for eval).
+    pub fn collect(
+        &mut self,
+        wire: &[SensorMessage],
+        mut attitude: Option<&mut AttitudeCore>,
+        mut each: impl FnMut(&SensorMessage) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
+        self.inputs.clear();
+        for m in wire {
+            each(m)?;
+            self.inputs.extend(input_of(m));
+            if let (SensorMessage::Imu(w), Some(core)) = (m, attitude.as_deref_mut())
+                && let Ok(imu) = Imu::try_from(w)
+            {
+                self.reports.clear();
+                let t0 = Instant::now();
+                let _ = core.on_input(&imu, &mut self.reports);
+                self.attitude_spent += t0.elapsed();
+                self.attitude_samples += 1;
+                for r in &self.reports {
+                    if let Ok(a) = Attitude::try_from(&AttitudeEstimate::from(r)) {
+                        self.inputs.push((5, AinsInput::Attitude(a)));
+                    }
+                }
+            }
+        }
+        self.inputs.sort_by_key(|(order, _)| *order);
+        Ok(())
+    }
+
+    /// The inputs collected, in order.
+    pub fn inputs(&self) -> impl Iterator<Item = &AinsInput> {
+        self.inputs.iter().map(|(_, i)| i)
+    }
+}
+
 /// Runs each of `estimators` over `scenario` with `sensors` and `seed`, on
 /// the same sensor data; with `attitude`, that estimator runs on the IMU too
 /// and its estimates are the `attitude/estimate` input (after the sensor's
@@ -133,16 +197,13 @@ where
     let mut data: Vec<Data> = (0..n).map(|_| Data::default()).collect();
     let mut nav: Vec<Vec<Nav>> = vec![Vec::new(); n];
     let mut spent = vec![Duration::ZERO; n];
-    let (mut wire, mut inputs, mut out) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut attitude_samples, mut attitude_spent, mut reports) =
-        (0u64, Duration::ZERO, Vec::new());
+    let (mut wire, mut step_inputs, mut out) = (Vec::new(), StepInputs::default(), Vec::new());
     let mut last_stamp = 0;
     while let Some(step) = g.step() {
         let step = step.context("a simulator step")?;
         wire.clear();
         nauta_sim::wire::to_wire(&step, &mut wire);
-        inputs.clear();
-        for m in &wire {
+        step_inputs.collect(&wire, attitude.as_deref_mut(), |m| {
             for d in data.iter_mut() {
                 match m {
                     SensorMessage::Truth(t) => take::<TruthState>(d, TRUTH_SERVICE, t)?,
@@ -150,25 +211,10 @@ where
                     _ => {}
                 }
             }
-            inputs.extend(input_of(m));
-            if let (SensorMessage::Imu(w), Some(core)) = (m, attitude.as_deref_mut())
-                && let Ok(imu) = Imu::try_from(w)
-            {
-                reports.clear();
-                let t0 = Instant::now();
-                let _ = core.on_input(&imu, &mut reports);
-                attitude_spent += t0.elapsed();
-                attitude_samples += 1;
-                for r in &reports {
-                    if let Ok(a) = Attitude::try_from(&AttitudeEstimate::from(r)) {
-                        inputs.push((5, AinsInput::Attitude(a)));
-                    }
-                }
-            }
-        }
-        inputs.sort_by_key(|(order, _)| *order);
+            Ok(())
+        })?;
         for (k, estimator) in estimators.iter_mut().enumerate() {
-            for (_, input) in &inputs {
+            for input in step_inputs.inputs() {
                 out.clear();
                 let t0 = Instant::now();
                 // A refusal (a spike, a gated fix) is counted by the service;
@@ -199,7 +245,7 @@ where
             estimator: spent,
             attitude: attitude
                 .is_some()
-                .then_some((attitude_samples, attitude_spent)),
+                .then_some((step_inputs.attitude_samples, step_inputs.attitude_spent)),
         });
     }
     Ok(runs)
@@ -244,7 +290,7 @@ pub fn survey_attitude() -> anyhow::Result<AttitudeCore> {
 
 /// The simulator's site (origin and the declination its magnetometer and
 /// AHRS have there).
-fn site(scenario: &ScenarioParams, sensors: SuiteConfig, seed: u64) -> anyhow::Result<Site> {
+pub fn site(scenario: &ScenarioParams, sensors: SuiteConfig, seed: u64) -> anyhow::Result<Site> {
     let g = Generator::new(scenario, Origin::lisbon(), sensors, seed, 1e6)?;
     let o = g.simulator().mission().origin();
     Ok(Site {
@@ -364,7 +410,7 @@ fn survey_dr_params() -> anyhow::Result<DrParams> {
 
 /// The `pf`, `ekf` and `dr` variants at `site` with the shipped survey
 /// manifest's parameters (what a vehicle runs) and `position_aiding`.
-fn variant_cores(site: Site, position_aiding: bool) -> anyhow::Result<Vec<AinsCore>> {
+pub fn variant_cores(site: Site, position_aiding: bool) -> anyhow::Result<Vec<AinsCore>> {
     let m = survey_manifest()?;
     let pf = AinsPfParams {
         position_aiding,
@@ -502,6 +548,16 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
         survey.scenario == ScenarioKind::Survey,
         "the default scenario is not the survey"
     );
+    if args.complete {
+        let complete = complete::complete_section(&complete_seeds(args.quick), progress)?;
+        let result = json!({ "complete": complete, "wall_s": t0.elapsed().as_secs_f64() });
+        if args.json {
+            println!("{result}");
+        } else {
+            print_complete(&result["complete"]);
+        }
+        return Ok(());
+    }
     // A-KIT first: it takes seconds, and a wrong directory fails at once.
     let akit = match &args.akit {
         Some(dir) => Value::Object(akit::akit_trajectories(dir, progress)?),
@@ -509,9 +565,9 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
     };
     // Every variant on the same survey data, the shipped attitude PF
     // feeding `attitude/estimate`; its speed at its shipped particle count
-    // is the attitude figure. The bench does not run the positioning yet
-    // (issue 14, point 4), so the run with position aiding has no fixes to
-    // use: `aided` and `unaided` are the same run until it does.
+    // is the attitude figure. These runs have no positioning (the complete
+    // system is `complete`, below), so `aided` and `unaided` are the same
+    // run here.
     let mut attitude = survey_attitude()?;
     let site7 = site(&survey, survey.sensors_preset(), 7)?;
     let mut cores = variant_cores(site7, false)?;
@@ -543,7 +599,9 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
     let mut dr = dr_manoeuvres(args.quick, progress)?;
     filters_on_manoeuvres(&mut dr, args.quick, progress)?;
     let spikes = spikes(args.quick, progress)?;
+    let complete = complete::complete_section(&complete_seeds(args.quick), progress)?;
     let result = json!({
+        "complete": complete,
         "survey": {
             "aided": survey_eval,
             "unaided": survey_eval,
@@ -561,6 +619,40 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
         print_table(&result);
     }
     Ok(())
+}
+
+fn print_complete(c: &Value) {
+    let Some(v) = c.as_object() else { return };
+    let f = |x: &Value| x.as_f64().unwrap_or(f64::NAN);
+    for (name, m) in v {
+        if !m.is_object() {
+            continue;
+        }
+        let k = |key: &str| &m[key];
+        println!(
+            "complete {name:<32} ains/nav N/E/D RMS {:.2} / {:.2} / {:.3} m (worst {:.2} / {:.2}), velocity {:.4} / {:.4} / {:.4} m/s, truth in 95 % {:.0} %; fix in 95 % {:.0} %; buoy fixes {:.2} m; thirds {:.2} -> {:.2} m; outliers {} of {} refused; positioning {:.0}x real time; {} seeds",
+            f(&k("nav.north_rms_m")["mean"]),
+            f(&k("nav.east_rms_m")["mean"]),
+            f(&k("nav.down_rms_m")["mean"]),
+            f(&k("nav.north_rms_m")["worst"]),
+            f(&k("nav.east_rms_m")["worst"]),
+            f(&k("nav.vel_north_rms_m_s")["mean"]),
+            f(&k("nav.vel_east_rms_m_s")["mean"]),
+            f(&k("nav.vel_down_rms_m_s")["mean"]),
+            f(&k("nav.inside_95_pct")["mean"]),
+            f(&k("fix.inside_95_pct")["mean"]),
+            f(k("buoy_fix_horizontal_rms_m")),
+            f(k("first_third_horizontal_rms_m")),
+            f(k("last_third_horizontal_rms_m")),
+            k("outliers_refused"),
+            k("outliers"),
+            f(k("positioning_realtime_factor")),
+            k("seeds"),
+        );
+    }
+    println!(
+        "(issue 14 targets: N and E <= 1.0 m, D <= 0.03 m, velocity <= 0.010 m/s, last third <= 1.5x the first; robustness <= 2 m horizontal, >= 95 % of the outliers refused; fixes 90-98 % inside; positioning >= 1000x; paper 000: 1.54 / 2.38 / 0.03 m)"
+    );
 }
 
 fn print_table(r: &Value) {
@@ -625,6 +717,7 @@ fn print_table(r: &Value) {
             mean(&naive)
         );
     }
+    print_complete(&r["complete"]);
     if let Some(v) = r["realtime_factor"].as_object() {
         for (variant, x) in v {
             println!(

@@ -18,6 +18,7 @@
 //!   the velocity alone.
 
 use crate::ains::tare::{DepthTare, TareState};
+use crate::local::flat;
 use crate::positioning::ekf::RangeEkf;
 use crate::positioning::frame::{RangeFrame, RangeObs, advance, moved};
 use crate::positioning::geometry::range_of_flight_m;
@@ -307,24 +308,58 @@ impl Positioning {
             ));
         }
         self.last_gps_ns = Some(g.stamp_ns);
-        self.start(
-            g.lat_rad,
-            g.lon_rad,
-            g.stamp_ns,
-            self.model.init_half_width_m,
-        );
         self.stats.gps_fixes += 1;
-        out.push(Fix {
-            stamp_ns: g.stamp_ns,
-            lat_rad: g.lat_rad,
-            lon_rad: g.lon_rad,
-            std_north_m: g.horizontal_std_m,
-            std_east_m: g.horizontal_std_m,
-            corr_ne: 0.0,
-            effective_particles: self.offsets().effective_particles,
-            source: source::GPS,
-        });
+        if !self.fuse_gps(g) {
+            self.start(
+                g.lat_rad,
+                g.lon_rad,
+                g.stamp_ns,
+                self.model.init_half_width_m,
+            );
+        }
+        out.extend(self.fix(g.stamp_ns, source::GPS));
         Ok(())
+    }
+
+    /// A GPS fix at the surface as a position measurement of the filter
+    /// (our addition: the paper restarts around each fix, so that the dive
+    /// starts from the last one alone, 2.5 m off with the simulator's
+    /// receiver; weighed, a minute at the surface averages them). False,
+    /// and nothing changed, when there is no position yet or the fix lies
+    /// beyond the gate from it (a restart).
+    fn fuse_gps(&mut self, g: &Gps) -> bool {
+        let Some(c) = self.centre else {
+            return false;
+        };
+        if g.stamp_ns < c.stamp_ns {
+            return false;
+        }
+        self.advance_to(g.stamp_ns);
+        let c = self.centre.expect("checked above");
+        let (zn, ze) = flat::to_local(c.lat_rad, c.lon_rad, g.lat_rad, g.lon_rad);
+        let var = g.horizontal_std_m.powi(2);
+        let e = self.offsets();
+        // d² of the 2-D innovation with the filter's covariance.
+        let (a, b, d) = (e.cov[0][0] + var, e.cov[0][1], e.cov[1][1] + var);
+        let (nn, ne) = (zn - e.mean[0], ze - e.mean[1]);
+        let det = a * d - b * b;
+        let d2 = (d * nn * nn - 2.0 * b * nn * ne + a * ne * ne) / det;
+        if !(det > 0.0 && d2 <= self.model.gate_sigmas.powi(2)) {
+            return false;
+        }
+        self.apply_walk();
+        let by = match &mut self.filter {
+            Filter::Pf(p) => {
+                p.update_position([zn, ze], var);
+                let m = p.estimate().mean;
+                p.recentre([m[0], m[1]]);
+                [m[0], m[1]]
+            }
+            Filter::Ekf(e) => e.update_position([zn, ze], var),
+        };
+        let c = self.centre.as_mut().expect("checked above");
+        (c.lat_rad, c.lon_rad) = moved(c.lat_rad, c.lon_rad, by[0], by[1]);
+        true
     }
 
     fn on_range(&mut self, b: &BuoyRangeReading, out: &mut Vec<Fix>) -> Result<(), EstimatorError> {

@@ -90,6 +90,27 @@ impl RangeEkf {
         by
     }
 
+    /// A position measurement `z` (north, east offsets, m) of variance
+    /// `var_m2` per axis (a GPS fix at the surface): the linear update with
+    /// `H = [I 0]`; the position correction the centre takes.
+    pub fn update_position(&mut self, z: [f64; 2], var_m2: f64) -> [f64; 2] {
+        for axis in 0..2 {
+            let mut h = RowVector4::zeros();
+            h[axis] = 1.0;
+            let ph = self.p * h.transpose();
+            let s = ph[axis] + var_m2;
+            let k = ph / s;
+            self.x += k * (z[axis] - self.x[axis]);
+            let a = Matrix4::identity() - k * h;
+            let p = a * self.p * a.transpose() + k * k.transpose() * var_m2;
+            self.p = (p + p.transpose()) * 0.5;
+        }
+        let by = [self.x[0], self.x[1]];
+        self.x[0] = 0.0;
+        self.x[1] = 0.0;
+        by
+    }
+
     /// The estimate about the centre.
     pub fn estimate(&self) -> Gaussian {
         Gaussian {

@@ -31,11 +31,14 @@ pub struct RangeModel {
     /// Default 0.02.
     pub position_walk_m_rt_s: f64,
     /// σ of the correction of the navigation's velocity at a start, m/s
-    /// per axis (a DVL-aided INS: its heading error times its speed, 0.5°
-    /// at 1.5 m/s is 0.013). Default 0.02.
+    /// per axis. Default 0.002: the aided INS `pf` on the survey (seed 7,
+    /// the development seed) errs by a mean of 0.0002 / −0.0013 m/s north /
+    /// east over the dive, 0.007 m/s RMS of which integrates to only
+    /// 0.3-0.4 m over 300 s (BENCHMARKS.md, "Acoustic positioning"); a
+    /// looser prior (0.02 before) lets the filter follow each noisy range.
     pub velocity_error_m_s: f64,
-    /// `q_v`, random walk of that correction, m/s/√s. Default 2e-4 (0.004
-    /// m/s over 400 s, a transect).
+    /// `q_v`, random walk of that correction, m/s/√s. Default 1e-5 (0.0005
+    /// m/s over the 2600 s survey; development seeds 7-9).
     pub velocity_walk_m_s_rt_s: f64,
     /// The gate: a range whose innovation is more than this many of its σ
     /// (eq. 54's σ_d with the filter's own spread) is refused and counted
@@ -60,8 +63,8 @@ impl Default for RangeModel {
             sound_speed_rel_sigma: 0.003,
             buoy_sigma_m: 2.5,
             position_walk_m_rt_s: 0.02,
-            velocity_error_m_s: 0.02,
-            velocity_walk_m_s_rt_s: 2e-4,
+            velocity_error_m_s: 0.002,
+            velocity_walk_m_s_rt_s: 1e-5,
             gate_sigmas: 4.0,
             surface_depth_m: 4.0,
             init_half_width_m: 5.0,
@@ -143,7 +146,7 @@ pub struct PositioningPfParams {
     /// particle after eq. 55's reproduction, m. Default 3.
     pub fill_half_width_m: f64,
     /// Half-width of the same completion in the velocity correction, m/s.
-    /// Default 0.005.
+    /// Default 0.002 (the correction's prior σ).
     pub fill_velocity_m_s: f64,
     /// The range model, gate and surface rule.
     pub model: RangeModel,
@@ -156,7 +159,7 @@ impl Default for PositioningPfParams {
             seed: 0,
             resample_threshold: 0.5,
             fill_half_width_m: 3.0,
-            fill_velocity_m_s: 0.005,
+            fill_velocity_m_s: 0.002,
             model: RangeModel::default(),
         }
     }

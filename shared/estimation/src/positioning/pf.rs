@@ -144,13 +144,29 @@ impl BuoyPf {
     /// Eqs. 51-55 for one range.
     pub fn update(&mut self, f: &RangeFrame) {
         let obs = *f.obs();
-        let n = self.state.len();
         let inv = -0.5 / obs.var_m2;
+        self.weigh(|s| {
+            let r = obs.range_m - f.predicted_m(s[0], s[1]);
+            inv * r * r
+        });
+    }
+
+    /// A position measurement `z` (north, east offsets, m) of variance
+    /// `var_m2` per axis: a GPS fix at the surface, weighed as a range is
+    /// (a Gaussian likelihood, our addition: the paper restarts at each).
+    pub fn update_position(&mut self, z: [f64; 2], var_m2: f64) {
+        let inv = -0.5 / var_m2;
+        self.weigh(|s| inv * ((z[0] - s[0]).powi(2) + (z[1] - s[1]).powi(2)));
+    }
+
+    /// `w_j ← w_j exp(log_likelihood(x_j))`, normalised in logarithms (an
+    /// unlikely measurement underflows nothing), then eq. 46 and, below
+    /// the threshold, eq. 55.
+    fn weigh(&mut self, log_likelihood: impl Fn(&[f64; 4]) -> f64) {
+        let n = self.state.len();
         let mut best = f64::NEG_INFINITY;
         for j in 0..n {
-            let s = &self.state[j];
-            let r = obs.range_m - f.predicted_m(s[0], s[1]);
-            let l = self.weight[j].ln() + inv * r * r;
+            let l = self.weight[j].ln() + log_likelihood(&self.state[j]);
             self.scratch[j] = l;
             best = best.max(l);
         }

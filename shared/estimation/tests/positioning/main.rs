@@ -56,7 +56,7 @@ fn horizontal(rms: [f64; 2]) -> f64 {
 }
 
 /// The harness's velocity bias alone moves a dead-reckoned position by
-/// 0.0072 m/s × 2700 s ≈ 19 m over the dive; the fixes hold it to metres
+/// 0.0013 m/s × 2700 s ≈ 3.5 m over the dive; the fixes hold it to metres
 /// all along (paper 000 Fig. 7: bounded, not drifting), the last third no
 /// worse than 1.5× the first.
 #[test]

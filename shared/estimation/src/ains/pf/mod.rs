@@ -444,7 +444,10 @@ impl ParticleAins {
             FIX => (&mut self.stats.fix, c.position_gate),
             _ => (&mut self.stats.depth, c.depth_gate),
         };
-        let decision = decide(stats, d2, limit, c.gate_max_rejections);
+        let decision = match decide(stats, d2, limit, c.gate_max_rejections) {
+            Decision::Use if kind == FIX && c.fix_reset => Decision::Reanchor,
+            d => d,
+        };
         let used = self.apply(false, axes, z, sigma, decision);
         if used {
             self.pos.refresh();
