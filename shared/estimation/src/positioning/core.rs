@@ -6,9 +6,10 @@
 //!   the simulator gives them above 0.3 m), or, without one, around the
 //!   first `ains/nav` position in a square of twice its σ.
 //! - At the surface (the tared depth below `surface_depth_m`, paper 000's
-//!   4 m): each GPS fix restarts the filter around it and is published as
-//!   a fix of source [`source::GPS`]; the last one before the dive is
-//!   where the dive starts from.
+//!   4 m): each GPS fix is weighed as a position measurement (the filter
+//!   restarts around it only without a position or beyond the gate), and
+//!   the estimate after it published as a fix of source [`source::GPS`];
+//!   the dive starts from what the surface fixes gave.
 //! - Each buoy message: the random walk since the last one, then the gate
 //!   (innovation against the filter's own spread and σ_d), then the
 //!   update; a fix of source [`source::BUOY`]. A refused range changes
@@ -35,6 +36,8 @@ use crate::role::{Estimator, EstimatorError};
 const TARE_SAMPLES: u64 = 20;
 /// A depth reading within this of a GPS fix is taken at the surface, ns.
 const SURFACE_GPS_WINDOW_NS: u64 = 1_000_000_000;
+/// The smallest σ a GPS fix is weighed with, m.
+const MIN_GPS_STD_M: f64 = 0.1;
 
 /// The dead-reckoned centre, rad, at `stamp_ns`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -337,7 +340,8 @@ impl Positioning {
         self.advance_to(g.stamp_ns);
         let c = self.centre.expect("checked above");
         let (zn, ze) = flat::to_local(c.lat_rad, c.lon_rad, g.lat_rad, g.lon_rad);
-        let var = g.horizontal_std_m.powi(2);
+        // A receiver's σ of zero would weigh with an infinite precision.
+        let var = g.horizontal_std_m.max(MIN_GPS_STD_M).powi(2);
         let e = self.offsets();
         // d² of the 2-D innovation with the filter's covariance.
         let (a, b, d) = (e.cov[0][0] + var, e.cov[0][1], e.cov[1][1] + var);
