@@ -274,6 +274,7 @@ impl Context {
             published: 0,
             given_up: 0,
             gave_up_flag: self.gave_up.clone(),
+            subscribers_seen: 0,
         })
     }
 

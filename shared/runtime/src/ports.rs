@@ -40,6 +40,8 @@ pub struct Publisher<M: Message> {
     pub(crate) published: u64,
     pub(crate) given_up: u64,
     pub(crate) gave_up_flag: Rc<Cell<bool>>,
+    /// Subscribers seen at the last [`Publisher::connect_late_joiners`].
+    pub(crate) subscribers_seen: usize,
 }
 
 impl<M: Message> std::fmt::Debug for Publisher<M> {
@@ -112,13 +114,43 @@ impl<M: Message> Publisher<M> {
     }
 
     /// Wakes the subscribers if anything was published since the last flush.
+    /// With nothing to send, attaches the subscribers that joined since the
+    /// last send and hands them the history (see [`Publisher::connect_late_joiners`]).
     pub fn flush(&mut self) {
         if self.pending {
             self.pending = false;
             self.unnotified = 0;
-            if let Err(e) = self.notifier.notify() {
-                tracing::debug!(service = %self.name, error = ?e, "notify failed");
-            }
+            self.notify();
+        } else {
+            self.connect_late_joiners();
+        }
+    }
+
+    /// Attaches subscribers that joined since the last send and delivers the
+    /// service's history to them, waking them when their number changed.
+    ///
+    /// iceoryx2 does this only inside a send (or an explicit
+    /// `update_connections`): a publisher with nothing new to say would never
+    /// give a restarted subscriber the history it warm-starts from. In the
+    /// ains ↔ positioning cycle that was a deadlock: a killed positioning came
+    /// back subscribed to an ains that was waiting for the positioning's
+    /// watermark and so published nothing, neither `ains/nav` nor its own
+    /// watermark (docs/design-notes.md, "Acoustic positioning").
+    pub fn connect_late_joiners(&mut self) {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        if let Err(e) = self.inner.update_connections() {
+            tracing::debug!(service = %self.name, error = ?e, "connecting new subscribers failed");
+        }
+        let n = self.subscriber_count();
+        if n != self.subscribers_seen {
+            self.subscribers_seen = n;
+            self.notify();
+        }
+    }
+
+    fn notify(&self) {
+        if let Err(e) = self.notifier.notify() {
+            tracing::debug!(service = %self.name, error = ?e, "notify failed");
         }
     }
 

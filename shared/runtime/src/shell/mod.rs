@@ -413,6 +413,12 @@ where
             for o in outs.iter_mut() {
                 o.flush();
             }
+            // A role with nothing to publish still hands its history to the
+            // consumers that restarted meanwhile (`Publisher::flush`).
+            progress_out.flush();
+            if let Some(s) = snapshot_out.as_mut() {
+                s.flush();
+            }
             // Once no triggering input can deliver anything, the role will
             // publish nothing more: it says so at once, even if an aiding
             // input is still open (in a cycle, that input's publisher may be

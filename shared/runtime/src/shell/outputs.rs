@@ -121,6 +121,8 @@ pub(super) struct SnapshotDecl<S> {
 /// An opened snapshot publisher.
 pub(super) trait SnapshotPort<S> {
     fn publish(&mut self, state: &S, stamp_ns: u64) -> anyhow::Result<()>;
+    /// Hands the latest snapshot to subscribers that joined since.
+    fn flush(&mut self);
 }
 
 struct TypedSnapshot<M: Message, S> {
@@ -133,6 +135,10 @@ impl<M: Message, S> SnapshotPort<S> for TypedSnapshot<M, S> {
         self.publisher
             .publish_now((self.to_wire)(state, stamp_ns))
             .map_err(Into::into)
+    }
+
+    fn flush(&mut self) {
+        self.publisher.flush();
     }
 }
 
