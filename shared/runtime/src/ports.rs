@@ -40,7 +40,7 @@ pub struct Publisher<M: Message> {
     pub(crate) published: u64,
     pub(crate) given_up: u64,
     pub(crate) gave_up_flag: Rc<Cell<bool>>,
-    /// Subscribers seen at the last [`Publisher::connect_late_joiners`].
+    /// Subscribers seen at the last `connect_late_joiners`.
     pub(crate) subscribers_seen: usize,
 }
 
@@ -115,7 +115,7 @@ impl<M: Message> Publisher<M> {
 
     /// Wakes the subscribers if anything was published since the last flush.
     /// With nothing to send, attaches the subscribers that joined since the
-    /// last send and hands them the history (see [`Publisher::connect_late_joiners`]).
+    /// last send and hands them the history (`connect_late_joiners`).
     pub fn flush(&mut self) {
         if self.pending {
             self.pending = false;
@@ -136,7 +136,7 @@ impl<M: Message> Publisher<M> {
     /// back subscribed to an ains that was waiting for the positioning's
     /// watermark and so published nothing, neither `ains/nav` nor its own
     /// watermark (docs/design-notes.md, "Acoustic positioning").
-    pub fn connect_late_joiners(&mut self) {
+    fn connect_late_joiners(&mut self) {
         use iceoryx2::port::update_connections::UpdateConnections;
         if let Err(e) = self.inner.update_connections() {
             tracing::debug!(service = %self.name, error = ?e, "connecting new subscribers failed");
