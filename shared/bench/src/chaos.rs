@@ -56,6 +56,10 @@ pub struct ChaosArgs {
     /// The attitude variant to run.
     #[arg(long, default_value = "mekf")]
     pub variant: String,
+    /// Write the run's log (the launcher's and every process's stderr, the
+    /// run with kills only) to this file instead of discarding it.
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<PathBuf>,
 }
 
 /// The estimators' output streams the bench follows, each with the process
@@ -230,10 +234,17 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
             ]);
         }
     }
+    let stderr = match &a.log {
+        Some(path) => Stdio::from(
+            std::fs::File::create(path)
+                .with_context(|| format!("cannot create the log {}", path.display()))?,
+        ),
+        None => Stdio::null(),
+    };
     let mut child: Child = Command::new(&exe)
         .args(&args)
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
+        .stderr(stderr)
         .spawn()
         .context("cannot start the run")?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);

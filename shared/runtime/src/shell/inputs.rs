@@ -44,11 +44,14 @@ pub(super) trait InputPort<I> {
     ) -> anyhow::Result<()>;
     /// Messages missing between sequence numbers.
     fn gaps(&self) -> u64;
+    /// The first message received: its stamp and sequence number.
+    fn first(&self) -> Option<(u64, u64)>;
 }
 
 struct TypedInput<M: Message, D, I> {
     sub: Subscriber<M>,
     last_stamp: Option<u64>,
+    first: Option<(u64, u64)>,
     into: fn(D) -> I,
 }
 
@@ -70,11 +73,13 @@ where
         let Self {
             sub,
             last_stamp,
+            first,
             into,
         } = self;
         let service = sub.service().to_owned();
         sub.drain(|m| {
             let stamp_ns = m.header().stamp_ns;
+            first.get_or_insert((stamp_ns, m.header().seq));
             // A repeated stamp is as wrong as one that goes backwards: one
             // input carries one message per instant.
             let checked = match *last_stamp {
@@ -105,6 +110,10 @@ where
     fn gaps(&self) -> u64 {
         self.sub.gaps().missing
     }
+
+    fn first(&self) -> Option<(u64, u64)> {
+        self.first
+    }
 }
 
 impl<I: 'static> InputDecl<I> {
@@ -122,6 +131,7 @@ impl<I: 'static> InputDecl<I> {
                 let port: Box<dyn InputPort<I>> = Box::new(TypedInput {
                     sub,
                     last_stamp: None,
+                    first: None,
                     into,
                 });
                 Ok((port, inbox))
