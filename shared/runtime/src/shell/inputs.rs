@@ -98,7 +98,9 @@ where
                         health.inputs += 1;
                     }
                     // Earlier than its publisher's own watermark: the
-                    // publisher broke its promise; the message is refused.
+                    // publisher broke its promise (or handed the history
+                    // of this service over after a watermark; see
+                    // `Outputs::publish_watermark` in the sensor); refused.
                     Err(e) => health.refuse(&service, "before-watermark", &e),
                 },
                 Err(e) => health.reject(&service, &e),
