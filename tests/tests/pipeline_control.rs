@@ -224,12 +224,12 @@ fn status_restart_swap_and_stop_from_another_shell() {
             ns.as_str(),
         ],
     );
-    // `status` finds the run once it is registered and its three processes
-    // (sensor, attitude, ains) run.
+    // `status` finds the run once it is registered and its four processes
+    // (sensor, attitude, ains, positioning) run.
     let mut status = serde_json::Value::Null;
     while !status["processes"]
         .as_array()
-        .is_some_and(|p| p.len() == 3 && p.iter().all(|p| p["state"] == "running"))
+        .is_some_and(|p| p.len() == 4 && p.iter().all(|p| p["state"] == "running"))
     {
         wd.check();
         assert!(

@@ -1,5 +1,5 @@
 //! Issue 14: `nauta-positioning` in the complete navigation system of
-//! `launch/complete.toml` (sensor, attitude, ains `pf` aided by
+//! `launch/survey.toml` (sensor, attitude, ains `pf` aided by
 //! `positioning/fix`, positioning `pf`). The cycle ains ↔ positioning runs
 //! to the end in `sim` clock, the same seed gives the same bytes, every buoy
 //! message and surface GPS fix gives a fix.
@@ -12,10 +12,6 @@ use nauta_tests::*;
 
 const BOUND: Duration = Duration::from_secs(400);
 
-fn complete_manifest() -> std::path::PathBuf {
-    workspace_root().join("launch").join("complete.toml")
-}
-
 #[test]
 fn the_complete_survey_is_deterministic_with_a_fix_per_message() {
     bin_dir();
@@ -24,7 +20,7 @@ fn the_complete_survey_is_deterministic_with_a_fix_per_message() {
         let ns = Namespace::unique();
         let out = launch_manifest(
             &wd,
-            &complete_manifest(),
+            &survey_manifest(),
             &["--fast", "--namespace", ns.as_str()],
         );
         assert_eq!(out.code(), Some(0), "{out}");

@@ -192,10 +192,8 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
         steps += 1;
         if lbl_enabled && let Some(w) = link.sync_point(m.stamp_ns) {
             let published = out.published();
-            out.progress
-                .publish(Progress::at(w, Role::Sensor, published))?;
+            out.publish_watermark(Progress::at(w, Role::Sensor, published))?;
             if lockstep && link.interrogator_present() {
-                out.flush();
                 let waited = link.wait_for(ctx, w, || {
                     serve_control(&mut control, ctx, last_stamp).map(|stop| !stop)
                 })?;
@@ -218,12 +216,12 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
             // is published, so nothing at or before it will come. A consumer
             // of a sparse channel (GPS at the surface, the buoy every 30 s)
             // then processes its other inputs without waiting for it.
-            if !lbl_enabled {
+            if lbl_enabled {
+                out.flush();
+            } else {
                 let published = out.published();
-                out.progress
-                    .publish(Progress::at(last_stamp + 1, Role::Sensor, published))?;
+                out.publish_watermark(Progress::at(last_stamp + 1, Role::Sensor, published))?;
             }
-            out.flush();
             if serve_control(&mut control, ctx, last_stamp)? || ctx.termination_requested() {
                 stopped = true;
                 break;
@@ -238,11 +236,9 @@ fn serve(ctx: &mut Context) -> anyhow::Result<()> {
             }
         }
     }
-    out.flush();
     // End of stream: nothing more will come from this source.
     let published = out.published();
-    out.progress
-        .publish_now(Progress::end_of_stream(last_stamp, Role::Sensor, published))?;
+    out.publish_watermark(Progress::end_of_stream(last_stamp, Role::Sensor, published))?;
     health.state = state::STOPPED;
     health.outputs = out.published();
     health.dropped = out.given_up() + link.timed_out;

@@ -83,6 +83,20 @@ impl Outputs {
         Ok(())
     }
 
+    /// Publishes a watermark (or the end of stream) and wakes everyone. The
+    /// data services are flushed first: each attaches the subscribers that
+    /// joined since its last send and hands them its history, so a consumer
+    /// restarted meanwhile has the messages a watermark covers before the
+    /// watermark itself (else it would refuse them as earlier than their
+    /// publisher's watermark; in `sim` clock a sparse channel such as the
+    /// modem's attached only at the next flush, after the batch's
+    /// watermark).
+    pub fn publish_watermark(&mut self, p: Progress) -> anyhow::Result<()> {
+        self.flush();
+        self.progress.publish_now(p)?;
+        Ok(())
+    }
+
     /// Wakes the subscribers of everything published since the last flush.
     pub fn flush(&mut self) {
         self.truth.flush();

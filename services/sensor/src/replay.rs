@@ -107,15 +107,17 @@ pub fn serve(ctx: &mut Context, path: &Path) -> anyhow::Result<()> {
             // recording is in stamp order, so nothing earlier than the next
             // message's stamp is still to come, and a consumer of a sparse
             // channel does not wait for that channel's next message.
-            if let Some(next) = replay.messages.get(i + 1) {
-                let published = out.published();
-                out.progress.publish(Progress::at(
-                    next.header().stamp_ns,
-                    Role::Sensor,
-                    published,
-                ))?;
+            match replay.messages.get(i + 1) {
+                Some(next) => {
+                    let published = out.published();
+                    out.publish_watermark(Progress::at(
+                        next.header().stamp_ns,
+                        Role::Sensor,
+                        published,
+                    ))?;
+                }
+                None => out.flush(),
             }
-            out.flush();
             if crate::serve_control(&mut control, ctx, last_stamp)? || ctx.termination_requested() {
                 stopped = true;
                 break;
@@ -130,10 +132,8 @@ pub fn serve(ctx: &mut Context, path: &Path) -> anyhow::Result<()> {
             }
         }
     }
-    out.flush();
     let published = out.published();
-    out.progress
-        .publish_now(Progress::end_of_stream(last_stamp, Role::Sensor, published))?;
+    out.publish_watermark(Progress::end_of_stream(last_stamp, Role::Sensor, published))?;
     health.state = state::STOPPED;
     health.outputs = published;
     health.dropped = out.given_up();

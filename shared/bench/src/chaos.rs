@@ -10,9 +10,16 @@
 //! the launcher's JSON summary (`nauta launch --json`): the attitude error is
 //! its `errors` (`nauta eval`'s computation), the losses its `gaps` and
 //! `lost`. The bench itself follows the estimators' outputs
-//! (`attitude/estimate`, `ains/nav`) for what only a consumer sees: stamps
-//! missing or repeated across the restarts and each instance's first output
-//! (the restart latency of a killed attitude or ains).
+//! (`attitude/estimate`, `ains/nav`, `positioning/fix`) for what only a
+//! consumer sees: stamps missing or repeated across the restarts (fixes come
+//! one per buoy message and surface GPS fix, so theirs are counted against
+//! the reference run's) and each instance's first output, the restart
+//! latency of a killed attitude or ains. A positioning publishes a fix only
+//! every 30 s of mission; its restart latency is to its first watermark on
+//! `positioning/progress`, when it processes inputs again. Once the sensor
+//! has ended its stream nothing more is killed: the run drains, and the
+//! launcher restarts nothing then (a kill of an estimator that is finishing
+//! failed one run of five on 2026-12-03).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -56,23 +63,36 @@ pub struct ChaosArgs {
     /// The attitude variant to run.
     #[arg(long, default_value = "mekf")]
     pub variant: String,
+    /// Write the run's log (the launcher's and every process's stderr, the
+    /// run with kills only) to this file instead of discarding it.
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<PathBuf>,
 }
 
 /// The estimators' output streams the bench follows, each with the process
 /// that publishes it in the shipped manifests.
-const FOLLOWED: [(&str, &str); 2] = [
+const FOLLOWED: [(&str, &str); 3] = [
     (ATTITUDE_ESTIMATE_SERVICE, "attitude"),
     (NAV_SOLUTION_SERVICE, "ains"),
+    (POSITION_FIX_SERVICE, "positioning"),
 ];
 
 /// Follows the estimators' outputs and the run events.
 struct Follower {
     estimates: Subscriber<AttitudeEstimate>,
     nav: Subscriber<NavSolution>,
+    fixes: Subscriber<PositionFix>,
+    /// The positioning's watermarks: its first one is a restarted
+    /// instance's first sign of work.
+    positioning_progress: Subscriber<Progress>,
+    /// The sensor's watermarks: after its end of stream the run drains, and
+    /// the launcher restarts nothing more (a kill then fails the run).
+    sensor_progress: Subscriber<Progress>,
+    sensor_ended: bool,
     events: Subscriber<RunEvent>,
-    _inboxes: [Inbox; 3],
+    _inboxes: [Inbox; 6],
     /// Every stamp of each followed stream, in arrival order.
-    stamps: [Vec<u64>; 2],
+    stamps: [Vec<u64>; 3],
     /// First arrival of each (process, instance).
     first_of_instance: BTreeMap<(&'static str, u32), Instant>,
     /// Run events: (kind, process, instance).
@@ -83,13 +103,20 @@ impl Follower {
     fn new(ctx: &Context) -> anyhow::Result<Self> {
         let (estimates, a) = ctx.subscriber(&services::attitude_estimate())?;
         let (nav, b) = ctx.subscriber(&services::nav_solution())?;
-        let (events, c) = ctx.subscriber(&services::run_events())?;
+        let (fixes, c) = ctx.subscriber(&services::position_fix())?;
+        let (positioning_progress, d) = ctx.subscriber(&services::progress(Role::Positioning))?;
+        let (sensor_progress, f) = ctx.subscriber(&services::progress(Role::Sensor))?;
+        let (events, e) = ctx.subscriber(&services::run_events())?;
         Ok(Self {
             estimates,
             nav,
+            fixes,
+            positioning_progress,
+            sensor_progress,
+            sensor_ended: false,
             events,
-            _inboxes: [a, b, c],
-            stamps: [Vec::new(), Vec::new()],
+            _inboxes: [a, b, c, d, e, f],
+            stamps: [Vec::new(), Vec::new(), Vec::new()],
             first_of_instance: BTreeMap::new(),
             events_seen: Vec::new(),
         })
@@ -98,7 +125,7 @@ impl Follower {
     fn poll(&mut self) -> anyhow::Result<()> {
         let now = Instant::now();
         let first = &mut self.first_of_instance;
-        let [att, nav] = &mut self.stamps;
+        let [att, nav, fix] = &mut self.stamps;
         self.estimates.drain(|e| {
             first
                 .entry((FOLLOWED[0].1, e.header.instance))
@@ -111,6 +138,17 @@ impl Follower {
                 .or_insert(now);
             nav.push(n.header.stamp_ns);
         })?;
+        self.fixes.drain(|f| fix.push(f.header.stamp_ns))?;
+        self.positioning_progress.drain(|p| {
+            if !p.header.is_end_of_stream() {
+                first
+                    .entry((FOLLOWED[2].1, p.header.instance))
+                    .or_insert(now);
+            }
+        })?;
+        let ended = &mut self.sensor_ended;
+        self.sensor_progress
+            .drain(|p| *ended |= p.header.is_end_of_stream())?;
         let seen = &mut self.events_seen;
         self.events.drain(|e| {
             seen.push((e.kind, fixed_str(&e.process), e.instance));
@@ -131,6 +169,21 @@ fn missing_and_repeated(stamps: &[u64]) -> (u64, u64) {
     };
     let missing = sorted.windows(2).map(|w| (w[1] - w[0]) / period - 1).sum();
     (missing, repeated)
+}
+
+/// Fixes missing against the reference run's count, plus stamps received
+/// twice or going backwards.
+fn fixes_lost(stamps: &[u64], reference: u64) -> u64 {
+    let repeated = stamps.windows(2).filter(|w| w[1] <= w[0]).count() as u64;
+    let mut unique = stamps.to_vec();
+    unique.sort_unstable();
+    unique.dedup();
+    reference.saturating_sub(unique.len() as u64) + repeated
+}
+
+/// Messages of `stream` in a launcher's JSON summary (0 when absent).
+fn stream_messages(summary: &serde_json::Value, stream: &str) -> u64 {
+    summary["streams"][stream]["messages"].as_u64().unwrap_or(0)
 }
 
 /// RMS roll, pitch, yaw (degrees) of `attitude/estimate` in a JSON summary,
@@ -197,6 +250,7 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         "the reference run failed: {ref_out}"
     );
     let ref_summary = super::summary(&ref_out).context("the reference run")?;
+    let ref_fixes = stream_messages(&ref_summary, POSITION_FIX_SERVICE);
     let (ref_rms, _) =
         summary_rms(&ref_summary).context("no attitude error in the reference summary")?;
 
@@ -230,10 +284,17 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
             ]);
         }
     }
+    let stderr = match &a.log {
+        Some(path) => Stdio::from(
+            std::fs::File::create(path)
+                .with_context(|| format!("cannot create the log {}", path.display()))?,
+        ),
+        None => Stdio::null(),
+    };
     let mut child: Child = Command::new(&exe)
         .args(&args)
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
+        .stderr(stderr)
         .spawn()
         .context("cannot start the run")?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
@@ -246,7 +307,7 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         if let Some(s) = child.try_wait()? {
             break s;
         }
-        if Instant::now() >= next_kill {
+        if Instant::now() >= next_kill && !follower.sensor_ended {
             next_kill = Instant::now()
                 + Duration::from_secs_f64(rng.random_range(a.min_interval..=a.max_interval));
             // A random estimator that runs now (sources are not estimators).
@@ -286,6 +347,9 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
     let summary = super::summary(&out).context("the run with kills")?;
     drop(follower.estimates);
     drop(follower.nav);
+    drop(follower.fixes);
+    drop(follower.positioning_progress);
+    drop(follower.sensor_progress);
     let events = std::mem::take(&mut follower.events_seen);
     drop(follower.events);
     drop(follower._inboxes);
@@ -329,8 +393,10 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         [0, 1].map(|k| missing_and_repeated(&follower.stamps[k]));
     let lost_estimates = att_missing + att_repeated;
     let lost_nav = nav_missing + nav_repeated;
+    let lost_fixes = fixes_lost(&follower.stamps[2], ref_fixes);
     let lost = lost_estimates
         .saturating_add(lost_nav)
+        .saturating_add(lost_fixes)
         .saturating_add(gaps)
         .saturating_add(in_processes);
     let report = json!({
@@ -344,6 +410,7 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
         "lost_per_consumer": {
             "attitude/estimate stream (missing or repeated stamps)": lost_estimates,
             "ains/nav stream (missing or repeated stamps)": lost_nav,
+            "positioning/fix stream (missing against the reference, or repeated)": lost_fixes,
             "launcher taps (sequence gaps)": gaps,
             "inside processes (health dropped)": in_processes,
         },
@@ -366,7 +433,7 @@ pub fn run(a: &ChaosArgs) -> anyhow::Result<()> {
             latencies.last().copied().unwrap_or(f64::NAN)
         );
         println!(
-            "lost: {lost_estimates} estimate stamps missing or repeated, {gaps} sequence gaps at the launcher, {in_processes} inside processes"
+            "lost: {lost_estimates} estimate and {lost_nav} navigation stamps missing or repeated, {lost_fixes} fixes, {gaps} sequence gaps at the launcher, {in_processes} inside processes"
         );
         println!(
             "attitude rms roll/pitch/yaw {:.3}/{:.3}/{:.3}° with kills vs {:.3}/{:.3}/{:.3}° without: largest change {change:.2} % (target < 10 %)",

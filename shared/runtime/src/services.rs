@@ -84,24 +84,27 @@ impl<M: Message> ServiceSpec<M> {
     }
 }
 
-/// Queue length for 100 Hz streams: 5 s of data, so a consumer can batch and
-/// a restarted one can replay (see [`history_for`]).
-const FAST: usize = 512;
+/// Queue length for 100 Hz streams: 20 s of data, so a consumer can batch
+/// and a restarted one can replay (see [`history_for`]).
+const FAST: usize = 2048;
 /// Queue length for ≤ 10 Hz streams.
-const SLOW: usize = 64;
+const SLOW: usize = 256;
 
 /// Samples a data service keeps for a subscriber that joins late: a process
 /// restarted (or swapped in) mid-run warm-starts from its last snapshot (every
 /// second of the run clock) and replays its inputs from there, so the history
-/// must cover a snapshot period plus the restart, in the run's clock: at
-/// `--rate 10` a 0.15 s restart is 1.5 s of mission. 4.8 s at 100 Hz, 6 s at
-/// 10 Hz. (Measured: 2.2 s at 100 Hz lost one sample in 5 kills at 10x on a
-/// loaded machine.)
+/// must reach back from the moment the new instance subscribes to the
+/// snapshot: the snapshot's age (up to 1 s), how far the dead instance lagged
+/// behind its inputs, and the restart, all in the run's clock. At `--rate 10`
+/// each 0.1 s of wall time is 1 s of history. Measured at 10x with four
+/// estimators on a loaded 2-core machine (docs/design-notes.md, "Acoustic
+/// positioning"): the ains lagged the sensor by up to 4 s and a restart took
+/// 0.2-0.4 s, so the 4.8 s this history once held lost 29-177 `ains/nav`
+/// stamps per late restart. 15.4 s at 100 Hz, 19.2 s at 10 Hz; three
+/// quarters of the queue, so that the live samples arriving before the new
+/// instance's first drain do not overwrite the oldest of its history.
 fn history_for(buffer: usize) -> usize {
-    match buffer {
-        FAST => 480,
-        _ => 60,
-    }
+    buffer / 4 * 3
 }
 
 /// `sensor/imu`.

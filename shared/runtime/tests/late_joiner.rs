@@ -4,7 +4,8 @@
 //! `update_connections`; found when a killed positioning came back
 //! subscribed to an ains that was waiting for the positioning's watermark
 //! and so published nothing: the cycle stalled for seconds and lost 6,000
-//! `ains/nav` samples in `nauta bench chaos --manifest launch/complete.toml`.
+//! `ains/nav` samples in `nauta bench chaos --manifest launch/complete.toml`
+//! (the complete system's manifest then; `launch/survey.toml` since).
 
 use std::sync::mpsc;
 use std::time::{Duration, Instant};

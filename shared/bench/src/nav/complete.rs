@@ -1,6 +1,6 @@
 //! Paper 000's complete navigation system in process (issue 14, point 4):
 //! the simulator's sensors, the attitude PF, the aided INS and the
-//! positioning, wired as `launch/complete.toml` wires the processes.
+//! positioning, wired as `launch/survey.toml` wires the processes.
 //!
 //! At each stamp, as the estimator shell orders ties: the aided INS takes
 //! the sensor's inputs and the attitude estimate and publishes `ains/nav`;
@@ -220,18 +220,6 @@ pub fn run_complete(
     })
 }
 
-/// The shipped manifest of the complete system: the bench runs what a
-/// vehicle runs.
-const COMPLETE_MANIFEST: &str = include_str!("../../../../launch/complete.toml");
-
-/// The complete system's manifest, parsed.
-pub fn complete_manifest() -> anyhow::Result<nauta_runtime::Manifest> {
-    nauta_runtime::Manifest::parse(
-        std::path::Path::new("launch/complete.toml"),
-        COMPLETE_MANIFEST,
-    )
-}
-
 /// The positioning variant `variant` with the manifest's parameters.
 pub fn positioning_core(
     manifest: &nauta_runtime::Manifest,
@@ -367,11 +355,11 @@ fn summary(per_seed: &[(u64, Value)]) -> Value {
 /// on the same seeds for reference.
 pub fn complete_section(seeds: &[u64], progress: bool) -> anyhow::Result<Value> {
     let survey = ScenarioParams::default();
-    let manifest = complete_manifest()?;
+    let manifest = super::survey_manifest()?;
     let shipped = manifest
         .processes
         .get("positioning")
-        .context("launch/complete.toml runs no positioning")?
+        .context("launch/survey.toml runs no positioning")?
         .variant
         .clone()
         .unwrap_or_else(|| "pf".to_owned());

@@ -44,11 +44,14 @@ pub(super) trait InputPort<I> {
     ) -> anyhow::Result<()>;
     /// Messages missing between sequence numbers.
     fn gaps(&self) -> u64;
+    /// The first message received: its stamp and sequence number.
+    fn first(&self) -> Option<(u64, u64)>;
 }
 
 struct TypedInput<M: Message, D, I> {
     sub: Subscriber<M>,
     last_stamp: Option<u64>,
+    first: Option<(u64, u64)>,
     into: fn(D) -> I,
 }
 
@@ -70,11 +73,13 @@ where
         let Self {
             sub,
             last_stamp,
+            first,
             into,
         } = self;
         let service = sub.service().to_owned();
         sub.drain(|m| {
             let stamp_ns = m.header().stamp_ns;
+            first.get_or_insert((stamp_ns, m.header().seq));
             // A repeated stamp is as wrong as one that goes backwards: one
             // input carries one message per instant.
             let checked = match *last_stamp {
@@ -93,7 +98,9 @@ where
                         health.inputs += 1;
                     }
                     // Earlier than its publisher's own watermark: the
-                    // publisher broke its promise; the message is refused.
+                    // publisher broke its promise (or handed the history
+                    // of this service over after a watermark; see
+                    // `Outputs::publish_watermark` in the sensor); refused.
                     Err(e) => health.refuse(&service, "before-watermark", &e),
                 },
                 Err(e) => health.reject(&service, &e),
@@ -104,6 +111,10 @@ where
 
     fn gaps(&self) -> u64 {
         self.sub.gaps().missing
+    }
+
+    fn first(&self) -> Option<(u64, u64)> {
+        self.first
     }
 }
 
@@ -122,6 +133,7 @@ impl<I: 'static> InputDecl<I> {
                 let port: Box<dyn InputPort<I>> = Box::new(TypedInput {
                     sub,
                     last_stamp: None,
+                    first: None,
                     into,
                 });
                 Ok((port, inbox))

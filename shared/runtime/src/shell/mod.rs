@@ -282,11 +282,14 @@ where
     pub fn serve(&self, ctx: &mut Context, mut core: E) -> anyhow::Result<()> {
         // A restarted or swapped-in instance continues from the role's
         // latest snapshot (the launcher hands it over).
+        let mut warm_from = None;
         if let Some(s) = &self.snapshot {
             match (s.warm_start)(ctx) {
                 Ok(Some((state, stamp))) => {
                     if let Err(e) = core.restore(&state, stamp) {
                         tracing::warn!(error = %e, "starting cold");
+                    } else {
+                        warm_from = Some(stamp);
                     }
                 }
                 Ok(None) => {}
@@ -389,7 +392,23 @@ where
                 taken.push(m.take()?);
             }
             for (i, p) in ports.iter_mut().enumerate() {
+                let before = p.first();
                 p.drain(i, &mut run.merge, &mut health)?;
+                // A warm start replays its inputs from the snapshot out of
+                // the services' history; a history that begins after it
+                // (the instance subscribed too late: see
+                // `services::history_for`) leaves a hole in the replay.
+                if let (None, Some((stamp, seq)), Some(snap)) = (before, p.first(), warm_from)
+                    && stamp > snap
+                    && seq > 0
+                {
+                    tracing::warn!(
+                        service = %decls[i].port.service,
+                        first_stamp_ns = stamp,
+                        snapshot_stamp_ns = snap,
+                        "the input's history begins after the snapshot: what it held in between is lost to this instance"
+                    );
+                }
             }
             for (m, (mark, ended)) in marks.iter().zip(taken) {
                 for &i in &m.inputs {

@@ -100,21 +100,35 @@ pub enum Arrival {
     SlowFirst(u64),
 }
 
+/// Where the source stops until it is told to go on: before each stamp of
+/// `at`, in turn, it says `paused` and waits for `go`.
+pub struct Pauses {
+    pub at: Vec<u64>,
+    pub go: mpsc::Receiver<()>,
+    pub paused: mpsc::Sender<()>,
+}
+
 /// The source: waits until `ready` processes reported ready, then publishes
 /// `data` as `arrival` says, a watermark after each batch, the end of stream
-/// last. `pause_at`: stops before that stamp until `resume` says go.
+/// last, stopping at `pauses`. Returns once the source listens for the
+/// READY events: start the processes it waits for after it.
 pub fn source(
     ns: Namespace,
     data: Vec<Out>,
     arrival: Arrival,
     ready: Vec<&'static str>,
-    pause_at: Option<(u64, mpsc::Receiver<()>, mpsc::Sender<()>)>,
+    pauses: Option<Pauses>,
 ) -> std::thread::JoinHandle<anyhow::Result<()>> {
-    std::thread::spawn(move || {
+    let (listening_tx, listening_rx) = mpsc::channel();
+    let h = std::thread::spawn(move || {
         let ctx = Context::new(&ns, settings(Role::Sensor, "source", 0))?;
-        // Listening for READY before the publishers exist: a consumer is
-        // ready once they do, and events keep no history.
+        // Listening for READY before anyone can be ready: events keep no
+        // history. (A role is ready only once the publishers below exist,
+        // but the collector is ready once the role's output exists, which
+        // can be before this thread ran at all: its READY was lost and the
+        // source waited for it forever, the hang of 2026-12-03.)
         let (mut events, _inbox) = ctx.subscriber(&services::run_events())?;
+        listening_tx.send(()).ok();
         let mut imu = ctx.publisher(&services::imu())?;
         let mut depth = ctx.publisher(&services::depth())?;
         let mut progress = ctx.publisher(&services::progress(Role::Sensor))?;
@@ -132,21 +146,22 @@ pub fn source(
             Arrival::InOrder => 0,
         });
         let mut i = 0;
-        let mut pause = pause_at;
+        let mut pause = pauses;
         while i < data.len() {
             let len = match arrival {
                 Arrival::InOrder => 32,
                 Arrival::SlowFirst(_) => 1 + (noise.next_u64() % 200) as usize,
             };
             let mut batch: Vec<Out> = data[i..(i + len).min(data.len())].to_vec();
-            if let Some((at, go, paused)) = &pause
-                && batch.iter().any(|o| stamp_of(o) >= *at)
+            if let Some(p) = pause.as_mut()
+                && let Some(&at) = p.at.first()
+                && batch.iter().any(|o| stamp_of(o) >= at)
             {
-                batch.retain(|o| stamp_of(o) < *at);
+                batch.retain(|o| stamp_of(o) < at);
                 if batch.is_empty() {
-                    paused.send(()).ok();
-                    go.recv()?;
-                    pause = None;
+                    p.paused.send(()).ok();
+                    p.go.recv()?;
+                    p.at.remove(0);
                     continue;
                 }
             }
@@ -177,7 +192,10 @@ pub fn source(
         drop((imu, depth, progress, events));
         ctx.finish();
         Ok(())
-    })
+    });
+    // (A source that failed before it listened says why when joined.)
+    let _ = listening_rx.recv();
+    h
 }
 
 /// Runs `shell` with a fresh `core` as `process` instance `instance`;
@@ -205,6 +223,24 @@ where
         ctx.finish();
         result
     })
+}
+
+/// The tracker as instance `instance` of process `tracker`, cold; `prepare`
+/// as in [`role`].
+pub fn tracker(
+    ns: &Namespace,
+    instance: u32,
+    prepare: impl FnOnce(&mut Context) + Send + 'static,
+) -> std::thread::JoinHandle<anyhow::Result<()>> {
+    role(
+        ns,
+        tracker_shell,
+        Tracker::cold(),
+        Role::Ains,
+        "tracker",
+        instance,
+        prepare,
+    )
 }
 
 /// Collects `ains/nav` until the end of stream of instance `final_instance`
@@ -334,15 +370,7 @@ pub fn run_tracker(data: Vec<Out>, arrival: Arrival) -> Collected {
         vec!["tracker", "collector"],
         None,
     );
-    let trk = role(
-        &ns,
-        tracker_shell,
-        Tracker::cold(),
-        Role::Ains,
-        "tracker",
-        0,
-        |_| {},
-    );
+    let trk = tracker(&ns, 0, |_| {});
     join(src, "source");
     join(trk, "tracker");
     join(col, "collector")
@@ -365,10 +393,22 @@ pub fn snapshot_file(s: &AinsSnapshot) -> std::path::PathBuf {
     path
 }
 
+/// How instance 1 takes over from instance 0 in [`run_handover`].
+#[derive(Debug, Clone, Copy)]
+pub enum Handover {
+    /// A hot swap: instance 1 in standby, activated at instance 0's last
+    /// output.
+    Swap,
+    /// Instance 0 stops; instance 1 starts warm from the latest snapshot once
+    /// the source has gone on alone for `lag_ns` (how far a killed instance
+    /// lagged behind its inputs, plus the restart, in the run's clock).
+    Restart { lag_ns: u64 },
+}
+
 /// What the launcher does for a swap or a restart: pause the source at
 /// `at_ns`, take the latest snapshot, start instance 1 from it (in standby
 /// for a swap), hand over, resume the source.
-pub fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
+pub fn run_handover(how: Handover, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
     let ns = Namespace::unique();
     let data = samples(30, 3);
     let expected = reference(&data);
@@ -380,24 +420,30 @@ pub fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
     let (mut snaps, _i) = launcher
         .subscriber(&services::snapshot::<AinsSnapshot>(Role::Ains))
         .expect("snapshot tap");
+    // Run events keep no history: listening before instance 1 starts.
+    let (mut events, _e) = launcher
+        .subscriber(&services::run_events())
+        .expect("run events");
     let (go_tx, go_rx) = mpsc::channel();
     let (paused_tx, paused_rx) = mpsc::channel();
+    let mut at = vec![at_ns];
+    if let Handover::Restart { lag_ns } = how
+        && lag_ns > 0
+    {
+        at.push(at_ns + lag_ns);
+    }
     let src = source(
         ns.clone(),
         data,
         Arrival::InOrder,
         vec!["tracker", "collector"],
-        Some((at_ns, go_rx, paused_tx)),
+        Some(Pauses {
+            at,
+            go: go_rx,
+            paused: paused_tx,
+        }),
     );
-    let first = role(
-        &ns,
-        tracker_shell,
-        Tracker::cold(),
-        Role::Ains,
-        "tracker",
-        0,
-        |_| {},
-    );
+    let first = tracker(&ns, 0, |_| {});
     paused_rx.recv().expect("source paused");
     // Let the tracker drain what the source published before the pause.
     let t0 = Instant::now();
@@ -422,72 +468,91 @@ pub fn run_handover(swap: bool, at_ns: u64) -> (Collected, u64, Vec<TrackOut>) {
     };
     let timeout = Duration::from_secs(30);
     let (second, boundary);
-    if swap {
-        let f = file.clone();
-        second = role(
-            &ns,
-            tracker_shell,
-            Tracker::cold(),
-            Role::Ains,
-            "tracker",
-            1,
-            move |c| {
+    match how {
+        Handover::Swap => {
+            let f = file.clone();
+            second = tracker(&ns, 1, move |c| {
                 c.standby = true;
                 c.snapshot_file = Some(f);
-            },
-        );
-        // Wait until the collector is attached to the new instance's
-        // publisher and the standby instance has had time to catch up.
-        wait_attached(&attached, 2);
-        std::thread::sleep(Duration::from_millis(300));
-        let answer = old
-            .request(&launcher, request(command::DEACTIVATE, 0), timeout)
-            .expect("deactivate");
-        assert_eq!(answer.status, 0, "instance 0 deactivated");
-        boundary = answer.last_stamp_ns;
-        join(first, "instance 0");
-        let new = ControlClient::open(&launcher, Role::Ains, 1).expect("control of instance 1");
-        let t0 = Instant::now();
-        loop {
-            let a = new.request(&launcher, request(command::ACTIVATE, boundary), timeout);
-            if matches!(a, Ok(ref r) if r.status == 0) {
-                break;
+            });
+            // Wait until the collector is attached to the new instance's
+            // publisher and the standby instance has had time to catch up.
+            wait_attached(&attached, 2);
+            std::thread::sleep(Duration::from_millis(300));
+            let answer = old
+                .request(&launcher, request(command::DEACTIVATE, 0), timeout)
+                .expect("deactivate");
+            assert_eq!(answer.status, 0, "instance 0 deactivated");
+            boundary = answer.last_stamp_ns;
+            join(first, "instance 0");
+            let new = ControlClient::open(&launcher, Role::Ains, 1).expect("control of instance 1");
+            let t0 = Instant::now();
+            loop {
+                let a = new.request(&launcher, request(command::ACTIVATE, boundary), timeout);
+                if matches!(a, Ok(ref r) if r.status == 0) {
+                    break;
+                }
+                assert!(t0.elapsed() < timeout, "instance 1 never activated: {a:?}");
+                std::thread::sleep(Duration::from_millis(10));
             }
-            assert!(t0.elapsed() < timeout, "instance 1 never activated: {a:?}");
-            std::thread::sleep(Duration::from_millis(10));
         }
-    } else {
-        let answer = old
-            .request(&launcher, request(command::STOP, 0), timeout)
-            .expect("stop");
-        assert_eq!(answer.status, 0);
-        join(first, "instance 0");
-        attached.store(0, Ordering::SeqCst);
-        // Instance 0 drained its inputs on STOP: its last output is the last
-        // velocity sample before the pause (what the launcher saw last).
-        boundary = (at_ns - 1) / IMU_DT_NS * IMU_DT_NS;
-        let f = file.clone();
-        second = role(
-            &ns,
-            tracker_shell,
-            Tracker::cold(),
-            Role::Ains,
-            "tracker",
-            1,
-            move |c| {
+        Handover::Restart { lag_ns } => {
+            let answer = old
+                .request(&launcher, request(command::STOP, 0), timeout)
+                .expect("stop");
+            assert_eq!(answer.status, 0);
+            join(first, "instance 0");
+            // Instance 0 drained its inputs on STOP: its last output is the
+            // last velocity sample before the pause (what the launcher saw
+            // last).
+            boundary = (at_ns - 1) / IMU_DT_NS * IMU_DT_NS;
+            if lag_ns > 0 {
+                // Nobody follows the source meanwhile: what it publishes now
+                // reaches instance 1 only through the services' history.
+                go_tx.send(()).expect("resume the source");
+                paused_rx.recv().expect("source paused again");
+            }
+            let f = file.clone();
+            second = tracker(&ns, 1, move |c| {
                 c.snapshot_file = Some(f);
                 c.resume_after_ns = Some(boundary);
-            },
-        );
-        wait_attached(&attached, 1);
+            });
+            // The source goes on once instance 1 has subscribed to it (its
+            // READY), as it would be running meanwhile in a real run. (Not
+            // the collector's count of publishers: a count taken before
+            // instance 0 left can be stored after it left, and the source
+            // then ended before instance 1 subscribed, which waited for the
+            // source's publishers forever: the hang of 2026-12-03.)
+            wait_ready(&mut events, "tracker", 1);
+        }
     }
     go_tx.send(()).expect("resume the source");
     join(src, "source");
     join(second, "instance 1");
     let _ = std::fs::remove_file(&file);
-    drop((old, snaps));
+    drop((old, snaps, events));
     launcher.finish();
     (join(col, "collector"), boundary, expected)
+}
+
+/// Waits for the READY event of `process` instance `instance`.
+pub fn wait_ready(events: &mut nauta_runtime::Subscriber<RunEvent>, process: &str, instance: u32) {
+    let t0 = Instant::now();
+    let mut ready = false;
+    while !ready {
+        events
+            .drain(|e| {
+                ready |= e.kind == event_kind::READY
+                    && e.instance == instance
+                    && fixed_str(&e.process) == process;
+            })
+            .expect("run events");
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "{process} instance {instance} never reported ready"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
 }
 
 pub const SNAPSHOT_NS: u64 = 1_000_000_000;

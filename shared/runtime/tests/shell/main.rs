@@ -95,7 +95,8 @@ fn bad_input_is_refused_and_counted() {
 #[test]
 fn hot_swap_publishes_every_stamp_exactly_once() {
     let _wd = Watchdog::new("hot swap", Duration::from_secs(180));
-    let (got, boundary, expected) = run_handover(true, 12 * SNAPSHOT_NS + 345 * 1_000_000);
+    let (got, boundary, expected) =
+        run_handover(Handover::Swap, 12 * SNAPSHOT_NS + 345 * 1_000_000);
     assert_every_stamp_once(&got.nav, "swap");
     // Up to the boundary the outputs are instance 0's, bit for bit.
     let out = outputs(&got.nav);
@@ -119,7 +120,10 @@ fn hot_swap_publishes_every_stamp_exactly_once() {
 #[test]
 fn a_warm_restart_continues_from_the_snapshot_within_3_sigma() {
     let _wd = Watchdog::new("warm restart", Duration::from_secs(180));
-    let (got, _, _) = run_handover(false, 17 * SNAPSHOT_NS + 505 * 1_000_000);
+    let (got, _, _) = run_handover(
+        Handover::Restart { lag_ns: 0 },
+        17 * SNAPSHOT_NS + 505 * 1_000_000,
+    );
     assert_every_stamp_once(&got.nav, "restart");
     let restarted: Vec<_> = got
         .nav
@@ -137,6 +141,26 @@ fn a_warm_restart_continues_from_the_snapshot_within_3_sigma() {
             truth_x(t)
         );
     }
+}
+
+/// Regression (the ains/nav stamps lost in `chaos_short_version`, 2026-12-03):
+/// a killed instance lagged behind its inputs and its successor took time
+/// to start, so it subscribed seconds of the run's clock after the snapshot
+/// it starts from; what its inputs' history no longer held was never
+/// published. At `--rate 10` 10 s of mission is 1 s of wall time: the
+/// history must reach back that far (4.8 s did not).
+#[test]
+fn a_restart_ten_seconds_behind_replays_from_the_snapshot() {
+    let _wd = Watchdog::new("late restart", Duration::from_secs(180));
+    let (got, _, _) = run_handover(
+        Handover::Restart {
+            lag_ns: 10 * SNAPSHOT_NS,
+        },
+        12 * SNAPSHOT_NS + 505 * 1_000_000,
+    );
+    assert_every_stamp_once(&got.nav, "late restart");
+    let h = got.health.expect("health");
+    assert_eq!((h.rejected, h.dropped), (0, 0), "refused or lost input");
 }
 
 #[test]
