@@ -163,9 +163,21 @@ pub fn position_fix() -> ServiceSpec<PositionFix> {
 pub fn lbl_solution() -> ServiceSpec<LblSolution> {
     ServiceSpec::data(LBL_SOLUTION_SERVICE, SLOW)
 }
+/// Queue length for snapshots. The shell publishes one at every whole second
+/// of the run's clock that a batch crosses, and one drain of a full data
+/// queue is a batch of up to 25.6 s (`SLOW` at 10 Hz; `FAST` at 100 Hz is
+/// 20.5 s), so a queue of 16 lost snapshots in a recording even when the
+/// logger kept up (`ains/snapshot`, 266 of 2,603 in a `--fast` survey whose
+/// ains waited on the positioning and then drained its backlog). 64 holds two
+/// such batches; a snapshot is at most 2.4 kB, so 16 subscribers cost 2.4 MB.
+const SNAPSHOTS: usize = 64;
+
 /// `<role>/snapshot`: the latest is kept for late subscribers (history 1).
 pub fn snapshot<M: Message>(role: Role) -> ServiceSpec<M> {
-    ServiceSpec::latest(&snapshot_service(role.name()), MAX_PUBLISHERS)
+    ServiceSpec {
+        buffer: SNAPSHOTS,
+        ..ServiceSpec::latest(&snapshot_service(role.name()), MAX_PUBLISHERS)
+    }
 }
 /// `<role>/health`.
 pub fn health(role: Role) -> ServiceSpec<Health> {
