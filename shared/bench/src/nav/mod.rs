@@ -122,7 +122,7 @@ fn input_of(m: &SensorMessage) -> Option<(u8, AinsInput)> {
     })
 }
 
-fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
+pub(crate) fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
     data.take(topic, M::TYPE_NAME, &codec::encode(m)?);
     Ok(())
 }
@@ -280,7 +280,7 @@ pub fn survey_manifest() -> anyhow::Result<Manifest> {
 pub fn survey_attitude() -> anyhow::Result<AttitudeCore> {
     let m = survey_manifest()?;
     let params = VariantParams::Pf(m.params("attitude", Some("pf"))?);
-    let site = m.site.context("launch/survey.toml has no [site]")?;
+    let site = m.site.clone().context("launch/survey.toml has no [site]")?;
     AttitudeCore::new(
         &params,
         site.latitude_deg.to_radians(),
@@ -323,7 +323,7 @@ fn run_dr(
 /// `f` of every job, in the jobs' order, on as many threads as the machine
 /// has cores: each job is its own seeded run, so the figures do not depend
 /// on the thread count (only the wall time does).
-fn par_map<J: Sync, R: Send>(
+pub(crate) fn par_map<J: Sync, R: Send>(
     jobs: &[J],
     f: impl Fn(&J) -> anyhow::Result<R> + Sync,
 ) -> anyhow::Result<Vec<R>> {
