@@ -1,0 +1,184 @@
+//! The backward pass of the fixed-interval Rauch-Tung-Striebel smoother,
+//! paper 004 eqs. 7-9 (Gelb, *Applied Optimal Estimation*, ch. 5, the paper's ref. 6, for the
+//! linear case; the nonlinear
+//! form linearises about the forward pass's estimates, as the paper does).
+//!
+//! With the forward pass's `E_i, P_i` (posterior at `t_i`) and
+//! `E⁻_{i+1} = φ_i E_i + b_i`, `P⁻_{i+1} = φ_i P_i φ_iᵀ + Q_i` (prior at
+//! `t_{i+1}`, [`ForwardStep`]), from `E_{N|N} = E_N`, `P_{N|N} = P_N`
+//! backwards:
+//!
+//! - eq. 8: `K_i = P_i φ_iᵀ (P⁻_{i+1})⁻¹`, computed as the solution of
+//!   `P⁻_{i+1} K_iᵀ = φ_i P_i` by Cholesky (both covariances symmetric), so
+//!   nothing is inverted and a prior that is not positive definite is
+//!   found, not divided by;
+//! - eq. 7: `E_{i|N} = E_i + K_i (E_{i+1|N} − E⁻_{i+1})`;
+//! - eq. 9: `P_{i|N} = P_i + K_i (P_{i+1|N} − P⁻_{i+1}) K_iᵀ`, made
+//!   symmetric and checked positive definite.
+//!
+//! The prior is taken from the forward pass as it was computed (the paper
+//! writes eq. 7's `φ_i E_i + b_i` and eq. 9's `φ_i P_i φ_iᵀ + Q_i`, which
+//! is what the forward pass predicted), so a filter that integrates eqs.
+//! 3-4 more finely than `φ_i` is smoothed about its own prediction.
+//!
+//! The cost is a few 4×4 products and one Cholesky per step, with no
+//! allocation but the output's.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::smoother::error::{SmoothError, StepField};
+use crate::smoother::step::{ForwardStep, SmoothedStep};
+
+/// Smooths a forward pass: one [`SmoothedStep`] per [`ForwardStep`], in
+/// the same order. An empty pass gives an empty result.
+pub fn smooth<const N: usize>(
+    steps: &[ForwardStep<N>],
+) -> Result<Vec<SmoothedStep<N>>, SmoothError> {
+    let mut out = Vec::new();
+    smooth_into(steps, &mut out)?;
+    Ok(out)
+}
+
+/// [`smooth`] into `out` (cleared first), reusing its allocation. On an
+/// error `out` is left empty.
+pub fn smooth_into<const N: usize>(
+    steps: &[ForwardStep<N>],
+    out: &mut Vec<SmoothedStep<N>>,
+) -> Result<(), SmoothError> {
+    out.clear();
+    let result = backward(steps, out);
+    if result.is_err() {
+        out.clear();
+    }
+    result
+}
+
+fn backward<const N: usize>(
+    steps: &[ForwardStep<N>],
+    out: &mut Vec<SmoothedStep<N>>,
+) -> Result<(), SmoothError> {
+    let Some(last) = steps.last() else {
+        return Ok(());
+    };
+    check_stamps(steps)?;
+    let n = steps.len() - 1;
+    check_posterior(last, n)?;
+    out.resize(
+        steps.len(),
+        SmoothedStep {
+            stamp_ns: 0,
+            x: SVector::zeros(),
+            p: SMatrix::zeros(),
+        },
+    );
+    // E_{N|N} = E_N, P_{N|N} = P_N.
+    out[n] = SmoothedStep {
+        stamp_ns: last.stamp_ns,
+        x: last.x_post,
+        p: last.p_post,
+    };
+    let mut x_next = last.x_post;
+    let mut p_next = last.p_post;
+    for i in (0..n).rev() {
+        let step = &steps[i];
+        let next = &steps[i + 1];
+        check_posterior(step, i)?;
+        check_transition(next, i + 1)?;
+        let Some(chol) = next.p_prior.cholesky() else {
+            return Err(SmoothError::NotPositiveDefinite {
+                step: i + 1,
+                stamp_ns: next.stamp_ns,
+                field: StepField::PPrior,
+            });
+        };
+        // Eq. 8: P⁻_{i+1} K_iᵀ = φ_i P_i.
+        let gain = chol.solve(&(next.phi * step.p_post)).transpose();
+        // Eq. 7.
+        let x = step.x_post + gain * (x_next - next.x_prior);
+        // Eq. 9.
+        let p = step.p_post + gain * (p_next - next.p_prior) * gain.transpose();
+        let p = (p + p.transpose()) * 0.5;
+        let fail = |field| {
+            Err(SmoothError::NonFinite {
+                step: i,
+                stamp_ns: step.stamp_ns,
+                field,
+            })
+        };
+        if !x.iter().all(|v| v.is_finite()) {
+            // Only an overflow gets here: every input was finite.
+            return fail(StepField::XSmoothed);
+        }
+        if !p.iter().all(|v| v.is_finite()) {
+            return fail(StepField::PSmoothed);
+        }
+        if p.cholesky().is_none() {
+            return Err(SmoothError::NotPositiveDefinite {
+                step: i,
+                stamp_ns: step.stamp_ns,
+                field: StepField::PSmoothed,
+            });
+        }
+        out[i] = SmoothedStep {
+            stamp_ns: step.stamp_ns,
+            x,
+            p,
+        };
+        x_next = x;
+        p_next = p;
+    }
+    Ok(())
+}
+
+fn check_stamps<const N: usize>(steps: &[ForwardStep<N>]) -> Result<(), SmoothError> {
+    for (i, pair) in steps.windows(2).enumerate() {
+        if pair[1].stamp_ns < pair[0].stamp_ns {
+            return Err(SmoothError::StampBackwards {
+                step: i + 1,
+                stamp_ns: pair[1].stamp_ns,
+                previous_ns: pair[0].stamp_ns,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The filtered state and covariance of step `i`: finite, `P_i` positive
+/// definite.
+fn check_posterior<const N: usize>(step: &ForwardStep<N>, i: usize) -> Result<(), SmoothError> {
+    finite(step, i, step.x_post.as_slice(), StepField::XPost)?;
+    finite(step, i, step.p_post.as_slice(), StepField::PPost)?;
+    if step.p_post.cholesky().is_none() {
+        return Err(SmoothError::NotPositiveDefinite {
+            step: i,
+            stamp_ns: step.stamp_ns,
+            field: StepField::PPost,
+        });
+    }
+    Ok(())
+}
+
+/// The transition into step `i` (`φ`, the prior): finite. The prior's
+/// positivity is checked by the Cholesky eq. 8 needs.
+fn check_transition<const N: usize>(step: &ForwardStep<N>, i: usize) -> Result<(), SmoothError> {
+    finite(step, i, step.phi.as_slice(), StepField::Phi)?;
+    finite(step, i, step.x_prior.as_slice(), StepField::XPrior)?;
+    finite(step, i, step.p_prior.as_slice(), StepField::PPrior)
+}
+
+fn finite<const N: usize>(
+    step: &ForwardStep<N>,
+    i: usize,
+    values: &[f64],
+    field: StepField,
+) -> Result<(), SmoothError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(SmoothError::NonFinite {
+            step: i,
+            stamp_ns: step.stamp_ns,
+            field,
+        })
+    }
+}
