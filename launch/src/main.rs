@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 
 use nauta_bench as bench;
 use nauta_launcher::{launch, logcmd, pipeline};
-use nauta_tools::{calibrate, eval, export, import, report};
+use nauta_tools::{calibrate, eval, export, import, lbl_plan, report};
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
 #[derive(Debug, Parser)]
@@ -97,6 +97,12 @@ enum Command {
         #[command(subcommand)]
         which: ImportCommand,
     },
+    /// LBL navigation: `nauta lbl plan LAYOUT -o MAP.png` maps paper 003's
+    /// sensitivities and operating box of a transponder layout.
+    Lbl {
+        #[command(subcommand)]
+        which: LblCommand,
+    },
     /// Benchmarks (use a release build).
     Bench {
         #[command(subcommand)]
@@ -133,6 +139,15 @@ enum ImportCommand {
     /// `propeller.csv`, `truth.csv`; each optional; columns in the README),
     /// with a manifest that runs the estimators the channels allow.
     Csv(import::csv::ImportCsvArgs),
+}
+
+#[derive(Debug, Subcommand)]
+enum LblCommand {
+    /// Paper 003 §III for a transponder layout: the sensitivity of the
+    /// position to range errors (Fig. 2) and to the baseline's length
+    /// (Fig. 3) as level contours in MAP.png, and the desirable operating
+    /// box (Fig. 4), drawn and printed.
+    Plan(lbl_plan::command::PlanArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -252,6 +267,9 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             ImportCommand::Broad(args) => import::broad(&args),
             ImportCommand::Akit(args) => import::akit::akit(&args),
             ImportCommand::Csv(args) => import::csv::csv(&args),
+        },
+        Command::Lbl { which } => match which {
+            LblCommand::Plan(args) => lbl_plan::command::run(&args),
         },
         Command::Bench { which } => match which {
             BenchCommand::Log { json } => bench::log::run(json).map(|()| ExitCode::SUCCESS),

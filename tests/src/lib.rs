@@ -17,6 +17,7 @@ use nauta_messages::{Role, RunEvent, event_kind, fixed_str};
 use nauta_runtime::{Context, Manifest, Namespace, Subscriber, services};
 
 mod kill;
+pub mod smoother_fixture;
 mod summary;
 pub use kill::kill_9_after_draining;
 pub use summary::Summary;

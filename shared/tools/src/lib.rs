@@ -3,7 +3,8 @@
 //! recording), [`report`] (its plots and table), [`export`] (KML, GeoJSON,
 //! GPX, CSV, Foxglove), [`import`] (outside data sets into recordings),
 //! [`calibrate`] (magnetometer calibration from a recording or the
-//! simulator). They read recordings through `nauta_log`'s one reader
+//! simulator), [`lbl_plan`] (paper 003's sensitivity maps and operating box
+//! of a transponder layout). They read recordings through `nauta_log`'s one reader
 //! ([`nauta_log::streams`], [`nauta_log::run`]); [`presets`] is what the
 //! simulator adds to a recording's run metadata.
 
@@ -11,6 +12,8 @@ pub mod calibrate;
 pub mod eval;
 pub mod export;
 pub mod import;
+pub mod lbl_plan;
+pub mod part_file;
 pub mod presets;
 pub mod progress;
 pub mod report;
