@@ -23,6 +23,10 @@
 //! - [`frames`]: frames in types: `Vector<Frd>`, `Vector<Ned>`, `Rotation<Frd, Ned>`,
 //!   and the one conversion between the wire's `[w, x, y, z]` and the quaternion.
 //! - [`estimator`]: the [`AttitudeEstimator`] role trait and its snapshot.
+//! - [`lbl`]: the LBL role's estimator (paper 003 §V's EKF of position and
+//!   current from transponder ranges and propeller dead reckoning, its
+//!   interrogation schedule, and the forward pass paper 004's smoother
+//!   runs over).
 //! - [`local`]: north/east/down about an origin: the exact local tangent plane
 //!   (through ECEF) every tool uses, and paper 002 eq. 4's flat form.
 //! - [`gyro`]: pure gyro integration, paper 000's baseline.
@@ -55,6 +59,7 @@ pub mod earth;
 pub mod estimator;
 pub mod frames;
 pub mod gyro;
+pub mod lbl;
 pub mod local;
 pub mod magnetic;
 pub mod mekf;

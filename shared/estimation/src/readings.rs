@@ -222,4 +222,8 @@ pub struct LblNav {
     pub transponder_id: u32,
     /// The last range was accepted by the validation gate.
     pub accepted: bool,
+    /// The estimate is on the other side of a two-transponder baseline
+    /// from where the vehicle started (paper 003 §III's ambiguity): the
+    /// wire's `DEGRADED` flag.
+    pub baseline_crossed: bool,
 }

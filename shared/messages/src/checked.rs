@@ -498,6 +498,7 @@ impl TryFrom<&LblSolution> for LblNav {
             )?,
             transponder_id: m.transponder_id,
             accepted: m.accepted == 1,
+            baseline_crossed: m.header.flags().contains(crate::Flags::DEGRADED),
         })
     }
 }

@@ -19,6 +19,7 @@ pub mod control;
 pub mod domain;
 pub mod estimates;
 pub mod header;
+pub mod lbl;
 pub mod positioning;
 pub mod registry;
 pub mod sensors;

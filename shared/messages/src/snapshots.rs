@@ -82,18 +82,25 @@ message! {
 }
 
 message! {
-    /// LBL EKF state [x, y, current_x, current_y] and P (paper 003).
-    #[wire(type_name = "nauta.LblSnapshot.v1", size = 200)]
+    /// LBL state for a warm restart or a hot swap: the estimator's whole
+    /// state, bincode-encoded (the codec's configuration) from
+    /// `nauta_estimation::lbl::LblState`: `E` and `P` (4 or 5 states), the
+    /// held inputs and the last steps' ones, the ranges and GPS fix waiting
+    /// for the next step, the interrogations, the counters. v1 (`E`, `P`
+    /// and the next transponder only) was never published: no LBL process
+    /// existed.
+    #[wire(type_name = "nauta.LblSnapshot.v2", size = 4152)]
     pub struct LblSnapshot {
-        /// Common header.
+        /// Common header; `stamp_ns` is the stamp of the last input processed.
         pub header: Header,
-        /// State x̂.
-        pub x: [f64; 4],
-        /// Covariance P, row-major 4×4.
-        pub p: [[f64; 4]; 4],
-        /// Next transponder to interrogate.
-        pub next_transponder: u32,
+        /// The variant that wrote it (`ekf`), NUL-padded.
+        pub variant: [u8; 16],
+        /// Bytes of `state` in use.
+        pub state_len: u32,
         /// Zero.
         pub pad: u32,
+        /// The state: the first `state_len` bytes of these words, each
+        /// little-endian.
+        pub state: [[u64; 32]; 16],
     }
 }

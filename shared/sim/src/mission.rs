@@ -344,22 +344,27 @@ pub fn survey(origin: Origin, spec: &SurveySpec) -> Mission {
 }
 
 /// The `lbl` scenario (papers 003/004; DESIGN §10): an Isurus-like vehicle at
-/// 1.2 m/s and 10 m depth round a 500 m × 400 m box and back up its first side,
-/// 2300 m of route (the shape is our choice; paper 003 does not give the route).
-pub fn lbl(origin: Origin) -> Mission {
+/// 1.2 m/s and 10 m depth round a 500 m × 400 m box `laps` times and back up
+/// its first side: 500 + 1800 `laps` m of route (2300 m, about 32 minutes,
+/// for one lap; five laps, 9.5 km, are over two hours, paper 004's mission
+/// length). The shape is our choice; paper 003 does not give the route.
+pub fn lbl(origin: Origin, laps: u32) -> Mission {
     let (d, u) = (10.0, 1.2);
+    let mut waypoints = vec![Waypoint::new(500.0, 0.0, d, u)];
+    for _ in 0..laps.max(1) {
+        waypoints.extend([
+            Waypoint::new(500.0, 400.0, d, u),
+            Waypoint::new(0.0, 400.0, d, u),
+            Waypoint::new(0.0, 0.0, d, u),
+            Waypoint::new(500.0, 0.0, d, u),
+        ]);
+    }
     Mission::Waypoints(WaypointMission {
         name: "lbl".into(),
         origin,
         start_yaw_rad: 0.0,
         still_s: 0.0,
-        waypoints: vec![
-            Waypoint::new(500.0, 0.0, d, u),
-            Waypoint::new(500.0, 400.0, d, u),
-            Waypoint::new(0.0, 400.0, d, u),
-            Waypoint::new(0.0, 0.0, d, u),
-            Waypoint::new(500.0, 0.0, d, u),
-        ],
+        waypoints,
     })
 }
 
@@ -440,7 +445,8 @@ mod tests {
     fn builders_have_the_documented_lengths() {
         let o = Origin::lisbon();
         assert!((route(&survey(o, &SurveySpec::default())) - 3850.0).abs() < 1e-9);
-        assert!(route(&lbl(o)) > 2000.0);
+        assert!((route(&lbl(o, 1)) - 2300.0).abs() < 1e-9);
+        assert!((route(&lbl(o, 5)) - 9500.0).abs() < 1e-9);
         assert!((route(&dr(o, DrManoeuvre::One)) - 650.0).abs() < 1e-9);
         assert!((route(&dr(o, DrManoeuvre::Two)) - 3500.0).abs() < 1e-9);
         assert!((route(&dr(o, DrManoeuvre::Three)) - 10700.0).abs() < 1e-9);

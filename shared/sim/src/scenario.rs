@@ -138,8 +138,12 @@ pub struct ScenarioParams {
     pub day_of_year: u16,
     /// `survey` shape.
     pub survey: SurveyParams,
-    /// `lbl` transponder layout: "Two" or "Four".
+    /// `lbl` transponder layout: "Two" or "Four" (also the site's
+    /// transponders when `[site]` lists none: docs/design-notes.md).
     pub lbl_layout: LblLayout,
+    /// `lbl`: laps of the box (1: 2.3 km, about 32 minutes; 5: 9.5 km,
+    /// over two hours).
+    pub laps: u32,
     /// `dr` manoeuvre of paper 002: 1, 2 or 3.
     pub dr_manoeuvre: u8,
     /// Length of the attitude scenarios (`still`, `rocking`, `yaw`), s.
@@ -162,6 +166,7 @@ impl Default for ScenarioParams {
             day_of_year: 172,
             survey: SurveyParams::default(),
             lbl_layout: LblLayout::Two,
+            laps: 1,
             dr_manoeuvre: 1,
             attitude_duration_s: 600.0,
             current: None,
@@ -196,6 +201,8 @@ pub enum ScenarioError {
 const MAX_DURATION_S: f64 = 7.0 * 86_400.0;
 /// Most survey transects (a lawnmower of 1,000 legs is already weeks long).
 const MAX_SURVEY_LEGS: usize = 1_000;
+/// Most laps of the `lbl` box (100: 180 km, a week).
+const MAX_LAPS: u32 = 100;
 /// Longest transect and widest spacing, m.
 const MAX_LEG_LENGTH_M: f64 = 100_000.0;
 /// Deepest set-point, m (the deepest ocean).
@@ -288,6 +295,11 @@ impl ScenarioParams {
             self.water.salinity_psu,
             (0.0..=45.0).contains(&self.water.salinity_psu),
         )?;
+        check(
+            "laps",
+            f64::from(self.laps),
+            (1..=MAX_LAPS).contains(&self.laps),
+        )?;
         if !(1..=3).contains(&self.dr_manoeuvre) {
             return Err(ScenarioError::Invalid {
                 name: "dr_manoeuvre",
@@ -314,7 +326,7 @@ impl ScenarioParams {
                     },
                 )
             }
-            ScenarioKind::Lbl => mission::lbl(origin),
+            ScenarioKind::Lbl => mission::lbl(origin, self.laps),
             ScenarioKind::Dr => mission::dr(
                 origin,
                 match self.dr_manoeuvre {

@@ -45,14 +45,18 @@ pub fn simulated(meta: &BTreeMap<String, String>, origin: Option<&GeoOrigin>) ->
                     north_m: t.north_m,
                     east_m: t.east_m,
                     depth_m: t.depth_m,
-                    turnaround_s: None,
+                    turnaround_s: Some(t.turnaround_s),
                 })
                 .collect()
         } else {
             Vec::new()
         },
         sound_speed_m_s,
-        turnaround_s: lbl.enabled.then_some(lbl.noise.turnaround),
+        // Each transponder has its own; the run's is the first one's.
+        turnaround_s: lbl
+            .enabled
+            .then(|| lbl.transponders.first().map(|t| t.turnaround_s))
+            .flatten(),
     }
 }
 

@@ -386,8 +386,9 @@ impl ModemNoise {
 ///   p(r₅₀) = ½); otherwise no reply;
 /// - a detected reply is a multipath (late, longer path) reply with
 ///   probability p_mp, with extra delay δ uniform in [δ_lo, δ_hi];
-/// - the round trip is t = 2r/c + t_ta + ε + δ (t_ta the transponder
-///   turnaround, ε ~ N(0, σ²) detection jitter, δ = 0 for the direct path),
+/// - the round trip is t = 2r/c + t_ta + ε + δ (t_ta the transponder's
+///   turnaround, given per transponder; ε ~ N(0, σ²) detection jitter,
+///   δ = 0 for the direct path),
 ///   and is measured on the clock as n = ⌊t / Δ⌋ ticks of Δ = 100 µs
 ///   (events time-stamped on the tick before them), t̃ = n Δ.
 ///
@@ -398,12 +399,13 @@ impl ModemNoise {
 pub struct LblSpec {
     /// Clock resolution Δ, s (default 100 µs, paper 003).
     pub clock_resolution: f64,
-    /// Transponder turnaround delay t_ta, s (default 12.5 ms, a typical
-    /// transponder; our choice).
-    pub turnaround: f64,
     /// Sound speed c, m/s (default 1500).
     pub sound_speed: f64,
-    /// Detection jitter σ, s (default 0: the clock quantisation only).
+    /// Detection jitter σ, s (default 0.4 ms, 0.30 m of range: our choice
+    /// for threshold detection on an analog envelope (paper 003 §IV): a
+    /// tone's envelope rises over a few cycles of its 20-30 kHz carrier,
+    /// and noise moves the crossing by a fraction of that rise; real LBL
+    /// ranges are good to decimetres, not the clock's 2 cm).
     pub timing_jitter_sigma: f64,
     /// Range r₅₀ at which half the replies are detected, m (default 2000, our choice).
     pub detection_range_50: f64,
@@ -419,9 +421,8 @@ impl Default for LblSpec {
     fn default() -> Self {
         Self {
             clock_resolution: 100e-6,
-            turnaround: 12.5e-3,
             sound_speed: 1500.0,
-            timing_jitter_sigma: 0.0,
+            timing_jitter_sigma: 0.4e-3,
             detection_range_50: 2000.0,
             detection_range_width: 100.0,
             multipath_probability: 0.05,
@@ -434,7 +435,6 @@ impl LblSpec {
     /// Check ranges.
     pub fn validate(&self) -> Result<(), NoiseError> {
         check_positive("lbl.clock_resolution", self.clock_resolution)?;
-        check_non_negative("lbl.turnaround", self.turnaround)?;
         check_positive("lbl.sound_speed", self.sound_speed)?;
         check_non_negative("lbl.timing_jitter_sigma", self.timing_jitter_sigma)?;
         check_non_negative("lbl.detection_range_50", self.detection_range_50)?;
@@ -453,9 +453,10 @@ impl LblSpec {
         1.0 / (1.0 + ((range - self.detection_range_50) / self.detection_range_width).exp())
     }
 
-    /// Range the vehicle computes from a round trip: c (t − t_ta) / 2, m.
-    pub fn range_from_round_trip(&self, round_trip: f64) -> f64 {
-        self.sound_speed * (round_trip - self.turnaround) / 2.0
+    /// Range the vehicle computes from a round trip to a transponder of
+    /// turnaround `turnaround`: c (t − t_ta) / 2, m.
+    pub fn range_from_round_trip(&self, round_trip: f64, turnaround: f64) -> f64 {
+        self.sound_speed * (round_trip - turnaround) / 2.0
     }
 }
 
@@ -507,14 +508,20 @@ impl LblNoise {
         &self.spec
     }
 
-    /// One interrogation of a transponder at true slant range `range` (m).
-    pub fn next<R: Rng + ?Sized>(&mut self, rng: &mut R, range: f64) -> LblOutcome {
+    /// One interrogation of a transponder of turnaround `turnaround` (s) at
+    /// true slant range `range` (m).
+    pub fn next<R: Rng + ?Sized>(
+        &mut self,
+        rng: &mut R,
+        range: f64,
+        turnaround: f64,
+    ) -> LblOutcome {
         let s = &self.spec;
         if !chance(rng, s.detection_probability(range)) {
             return LblOutcome::NoReply;
         }
         let multipath = chance(rng, s.multipath_probability);
-        let mut t = 2.0 * range / s.sound_speed + s.turnaround;
+        let mut t = 2.0 * range / s.sound_speed + turnaround;
         if s.timing_jitter_sigma > 0.0 {
             t += s.timing_jitter_sigma * std_normal(rng);
         }

@@ -27,9 +27,10 @@ pub enum SuiteError {
         /// Value given.
         value: f64,
     },
-    /// Two transponders share an id.
-    #[error("duplicate LBL transponder id {0}")]
-    DuplicateTransponder(u32),
+    /// The transponders are not a layout (a repeated id, two at one place,
+    /// a value out of range).
+    #[error("LBL transponders: {0}")]
+    Layout(#[from] nauta_estimation::lbl::LayoutError),
     /// An interrogation for a transponder that is not configured.
     #[error("unknown LBL transponder id {0}")]
     UnknownTransponder(u32),
@@ -305,19 +306,10 @@ impl Default for ModemConfig {
     }
 }
 
-/// One LBL transponder, fixed, in the mission's local frame.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Transponder {
-    /// Id used by `lbl/interrogate` and `sensor/lbl`.
-    pub id: u32,
-    /// North of the mission origin, m.
-    pub north_m: f64,
-    /// East of the mission origin, m.
-    pub east_m: f64,
-    /// Depth, m.
-    pub depth_m: f64,
-}
+/// One LBL transponder, fixed, in the mission's local frame, with its own
+/// turnaround delay (the site's, `[site] transponders`: the vehicle's
+/// configuration and the simulator's truth are one list).
+pub use nauta_estimation::lbl::Transponder;
 
 /// Transponder layouts for the `lbl` scenario ([`crate::mission::lbl`]: a
 /// 500 m (north) × 400 m (east) box from the origin).
@@ -336,20 +328,17 @@ pub enum LblLayout {
 }
 
 impl LblLayout {
-    /// The transponders of this layout.
-    pub fn transponders(self) -> Vec<Transponder> {
-        let t = |id, north_m, east_m| Transponder {
-            id,
-            north_m,
-            east_m,
-            depth_m: 20.0,
-        };
-        let mut v = vec![t(1, -50.0, -150.0), t(2, 550.0, -150.0)];
-        if self == Self::Four {
-            v.push(t(3, -50.0, 550.0));
-            v.push(t(4, 550.0, 550.0));
+    /// The layout's name (`"Two"`, `"Four"`), as manifests write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Two => "Two",
+            Self::Four => "Four",
         }
-        v
+    }
+
+    /// The transponders of this layout ([`nauta_estimation::lbl::layout::preset`]).
+    pub fn transponders(self) -> Vec<Transponder> {
+        nauta_estimation::lbl::layout::preset(self.name()).unwrap_or_default()
     }
 }
 
@@ -362,8 +351,13 @@ pub struct LblConfig {
     /// The transponders (default [`LblLayout::Two`]).
     pub transponders: Vec<Transponder>,
     /// Round-trip errors (default [`LblSpec::default`]: 100 µs clock, paper
-    /// 003); its `sound_speed` is replaced by the suite's true sound speed.
+    /// 003; 0.4 ms detection jitter); its `sound_speed` is replaced by the
+    /// suite's true sound speed.
     pub noise: LblSpec,
+    /// `[start, end]`, s of the run's clock: no reply is heard in this
+    /// window (a blackout: the transponders' batteries, a thermocline, a
+    /// ship's noise). Default none.
+    pub blackout_s: Option<[f64; 2]>,
 }
 
 impl LblConfig {
@@ -379,6 +373,7 @@ impl Default for LblConfig {
             enabled: false,
             transponders: LblLayout::Two.transponders(),
             noise: LblSpec::default(),
+            blackout_s: None,
         }
     }
 }
@@ -540,12 +535,14 @@ impl SuiteConfig {
         non_negative("modem.buoy_gps_sigma_m", m.buoy_gps_sigma_m)?;
         m.noise.validate()?;
         self.lbl.noise.validate()?;
-        for (i, t) in self.lbl.transponders.iter().enumerate() {
-            finite("lbl.transponders.north_m", t.north_m)?;
-            finite("lbl.transponders.east_m", t.east_m)?;
-            finite("lbl.transponders.depth_m", t.depth_m)?;
-            if self.lbl.transponders[..i].iter().any(|o| o.id == t.id) {
-                return Err(SuiteError::DuplicateTransponder(t.id));
+        nauta_estimation::lbl::Layout::new(self.lbl.transponders.clone())?;
+        if let Some([a, b]) = self.lbl.blackout_s {
+            non_negative("lbl.blackout_s", a)?;
+            if !(b >= a && b.is_finite()) {
+                return Err(SuiteError::Invalid {
+                    name: "lbl.blackout_s",
+                    value: b,
+                });
             }
         }
         if let Some(c) = self.sound_speed_m_s {

@@ -456,7 +456,7 @@ impl SensorSuite {
         if let Some(last) = &self.prev
             && send_ns <= self::stamp_ns(last.t_s)
         {
-            ping.leg = outbound(self.sound_speed_m_s, lbl, &ping, &position(last));
+            ping.leg = outbound(self.sound_speed_m_s, &ping, &position(last));
         }
         lbl.pings.push(ping);
         self.stats.lbl_interrogations += 1;
@@ -679,6 +679,7 @@ impl SensorSuite {
             return;
         };
         let c = self.sound_speed_m_s;
+        let blackout = self.config.lbl.blackout_s;
         let prev = self.prev.as_ref();
         let mut i = 0;
         while i < s.pings.len() {
@@ -699,7 +700,7 @@ impl SensorSuite {
                     Some(pr) => position(pr),
                     None => p1,
                 };
-                ping.leg = outbound(c, s, &ping, &p);
+                ping.leg = outbound(c, &ping, &p);
                 s.pings[i] = ping;
             }
             let PingLeg::Returning { d_out, emit_s } = ping.leg else {
@@ -715,8 +716,15 @@ impl SensorSuite {
             s.pings.remove(i);
             let d_back = c * (t_r - emit_s);
             let r_eff = 0.5 * (d_out + d_back);
-            let true_rt = (d_out + d_back) / c + s.noise.spec().turnaround;
-            let (reply, multipath) = match s.noise.next(&mut s.rng, r_eff) {
+            let true_rt = (d_out + d_back) / c + tx.turnaround_s;
+            let outcome = s.noise.next(&mut s.rng, r_eff, tx.turnaround_s);
+            // The draws are made whatever the blackout: a run with one
+            // differs from one without only by the replies it loses.
+            if blackout.is_some_and(|[a, b]| t_r >= a && t_r <= b) {
+                self.stats.lbl_blackout += 1;
+                continue;
+            }
+            let (reply, multipath) = match outcome {
                 LblOutcome::NoReply => {
                     self.stats.lbl_no_reply += 1;
                     continue;
@@ -753,12 +761,12 @@ impl SensorSuite {
 }
 
 /// The outbound leg of a ping from vehicle position `p` at its send time.
-fn outbound(c: f64, s: &LblState, ping: &Ping, p: &Vector3<f64>) -> PingLeg {
+fn outbound(c: f64, ping: &Ping, p: &Vector3<f64>) -> PingLeg {
     let tx = &ping.transponder;
     let d_out = (Vector3::new(tx.north_m, tx.east_m, tx.depth_m) - p).norm();
     PingLeg::Returning {
         d_out,
-        emit_s: seconds(ping.send_ns) + d_out / c + s.noise.spec().turnaround,
+        emit_s: seconds(ping.send_ns) + d_out / c + tx.turnaround_s,
     }
 }
 

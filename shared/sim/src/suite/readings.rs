@@ -239,4 +239,6 @@ pub struct SuiteStats {
     pub lbl_no_reply: u64,
     /// LBL multipath replies.
     pub lbl_multipath: u64,
+    /// LBL replies lost in the blackout window.
+    pub lbl_blackout: u64,
 }

@@ -42,7 +42,7 @@ fn lbl_steps() -> &'static Steps {
     static S: OnceLock<Steps> = OnceLock::new();
     S.get_or_init(|| {
         let o = Origin::lisbon();
-        record(mission::lbl(o), env(o), 300.0)
+        record(mission::lbl(o, 1), env(o), 300.0)
     })
 }
 
@@ -381,10 +381,45 @@ fn lbl_closed_loop(config: SuiteConfig, seed: u64) -> ClosedLoop {
     (asked, replies, steps)
 }
 
+/// A blackout window loses exactly the replies heard in it: the same
+/// pings outside it give the same replies, bit for bit.
+#[test]
+fn an_lbl_blackout_loses_only_its_replies() {
+    let config = SuiteConfig::lbl(LblLayout::Two);
+    let (_, all, _) = lbl_closed_loop(config.clone(), 5);
+    let mut dark = config;
+    dark.lbl.blackout_s = Some([60.0, 120.0]);
+    let steps = lbl_steps();
+    let o = Origin::lisbon();
+    // Ping as the run without blackout did, so that both ask the same.
+    let (asked, _, _) = lbl_closed_loop(SuiteConfig::lbl(LblLayout::Two), 5);
+    let mut s = SensorSuite::new(dark, 5, o, &env(o)).expect("suite");
+    let mut got = Vec::new();
+    let mut k = 0;
+    for (t, i) in steps {
+        let m = s.step(t, i).expect("step");
+        got.extend(m.lbl.iter().map(|r| (*r, m.stamp_ns)));
+        while k < asked.len() && asked[k].1 == m.stamp_ns {
+            s.interrogate(asked[k].0, asked[k].1).expect("interrogate");
+            k += 1;
+        }
+    }
+    let inside = |r: &LblReplyReading| (60e9..=120e9).contains(&(r.stamp_ns as f64));
+    let outside: Vec<_> = all.iter().filter(|(r, _)| !inside(r)).collect();
+    assert!(got.iter().all(|(r, _)| !inside(r)));
+    assert_eq!(got.len(), outside.len());
+    for ((a, _), (b, _)) in got.iter().zip(outside) {
+        assert_eq!(a, b);
+    }
+    assert!(s.stats().lbl_blackout > 20, "{:?}", s.stats());
+}
+
 #[test]
 fn lbl_closed_loop_round_trips() {
     let mut config = SuiteConfig::lbl(LblLayout::Four);
     config.lbl.noise.multipath_probability = 0.0;
+    // The physics and the clock alone (the detection jitter has its own test).
+    config.lbl.noise.timing_jitter_sigma = 0.0;
     let tx = config.lbl.transponders.clone();
     let spec = config.lbl.noise;
     let (asked, replies, steps) = lbl_closed_loop(config, 11);
@@ -428,7 +463,7 @@ fn lbl_closed_loop_round_trips() {
             .expect("transponder");
         let p = vehicle_at(steps, r.interrogation_stamp_ns);
         let range = (Vector3::new(t.north_m, t.east_m, t.depth_m) - p).norm();
-        let predicted = 2.0 * range / c + spec.turnaround;
+        let predicted = 2.0 * range / c + t.turnaround_s;
         let bound = 1e-4 + v_max * r.round_trip_s / c + 1e-9;
         assert!(
             (r.round_trip_s - predicted).abs() <= bound,
@@ -446,6 +481,8 @@ fn lbl_closed_loop_round_trips() {
 fn lbl_multipath_replies_are_later() {
     let mut config = SuiteConfig::lbl(LblLayout::Two);
     config.lbl.noise.multipath_probability = 0.5;
+    // The delays alone, without the detection jitter.
+    config.lbl.noise.timing_jitter_sigma = 0.0;
     let spec = config.lbl.noise;
     let (_, replies, _) = lbl_closed_loop(config, 12);
     let multipath: Vec<_> = replies.iter().filter(|(r, _)| r.multipath).collect();
@@ -514,7 +551,23 @@ fn presets_and_serde() {
     assert!(bad.validate().is_err());
     let mut dup = SuiteConfig::lbl(LblLayout::Two);
     dup.lbl.transponders[1].id = 1;
-    assert_eq!(dup.validate(), Err(SuiteError::DuplicateTransponder(1)));
+    assert_eq!(
+        dup.validate(),
+        Err(SuiteError::Layout(
+            nauta_estimation::lbl::LayoutError::DuplicateId(1)
+        ))
+    );
+    let mut on_top = SuiteConfig::lbl(LblLayout::Two);
+    on_top.lbl.transponders[1].north_m = on_top.lbl.transponders[0].north_m;
+    on_top.lbl.transponders[1].east_m = on_top.lbl.transponders[0].east_m + 0.5;
+    let e = on_top.validate().expect_err("coincident");
+    assert!(
+        e.to_string().contains("cannot tell a position apart"),
+        "{e}"
+    );
+    let mut bad_window = SuiteConfig::lbl(LblLayout::Two);
+    bad_window.lbl.blackout_s = Some([100.0, 50.0]);
+    assert!(bad_window.validate().is_err());
 
     use serde::Deserialize;
     use serde::de::value::{Error, MapDeserializer};

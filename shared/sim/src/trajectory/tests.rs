@@ -87,7 +87,7 @@ fn strapdown_follows_the_lbl_route_in_a_current() {
     let o = Origin::from_degrees(-23.8, -45.4);
     let mut e = env();
     e.current = Current::lbl_default();
-    let mut s = sim(lbl(o), e, 3);
+    let mut s = sim(lbl(o, 1), e, 3);
     let mut ins = Strapdown::new(s.truth().strapdown_state()).expect("valid start");
     let (mut max_h, mut max_v, mut max_att) = (0.0f64, 0.0f64, 0.0f64);
     for _ in 0..30_000 {
@@ -184,7 +184,7 @@ fn survey_visits_its_waypoints_and_surfaces() {
 
 #[test]
 fn lbl_route_holds_the_track_in_a_current() {
-    let m = lbl(Origin::lisbon());
+    let m = lbl(Origin::lisbon(), 1);
     let Mission::Waypoints(w) = m.clone() else {
         unreachable!("lbl is a waypoint mission")
     };
@@ -309,7 +309,7 @@ fn attitude_motions_are_reproduced_by_the_mechanization() {
 fn propeller_and_current_in_the_truth() {
     let mut e = env();
     e.current = Current::lbl_default();
-    let mut s = sim(lbl(Origin::lisbon()), e, 5);
+    let mut s = sim(lbl(Origin::lisbon(), 1), e, 5);
     for _ in 0..12_000 {
         s.step();
     }

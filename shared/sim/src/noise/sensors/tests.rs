@@ -173,15 +173,20 @@ fn modem_loss_rate_jitter_and_sound_speed() {
 
 #[test]
 fn lbl_multipath_rate_quantisation_and_detection() {
-    let spec = LblSpec::default();
+    // The clock alone (no detection jitter), so a direct reply is exact to a tick.
+    let spec = LblSpec {
+        timing_jitter_sigma: 0.0,
+        ..LblSpec::default()
+    };
     let mut lbl = LblNoise::new(spec).expect("spec");
     let mut r = rng(10);
     let range = 700.0;
-    let true_rt = 2.0 * range / spec.sound_speed + spec.turnaround;
+    let ta = 12.5e-3;
+    let true_rt = 2.0 * range / spec.sound_speed + ta;
     let n = 220_000;
     let (mut direct, mut multi, mut none) = (0usize, 0usize, 0usize);
     for _ in 0..n {
-        let out = lbl.next(&mut r, range);
+        let out = lbl.next(&mut r, range, ta);
         if let Some(reply) = out.reply() {
             // Every round trip is a whole number of 100 µs ticks.
             assert_eq!(reply.round_trip, reply.ticks as f64 * 100e-6);
@@ -211,17 +216,48 @@ fn lbl_multipath_rate_quantisation_and_detection() {
     assert!(none < 5, "misses {none}");
     // Range from a direct reply is within c Δ / 2 = 7.5 cm of the truth.
     let rt = (true_rt / 100e-6).floor() * 100e-6;
-    assert!((spec.range_from_round_trip(rt) - range).abs() <= 0.075 + 1e-9);
+    assert!((spec.range_from_round_trip(rt, ta) - range).abs() <= 0.075 + 1e-9);
 
     // Detection probability: ½ at r₅₀, falling with range.
     let trials = 20_000;
     let detected = (0..trials)
-        .filter(|_| lbl.next(&mut r, spec.detection_range_50).reply().is_some())
+        .filter(|_| {
+            lbl.next(&mut r, spec.detection_range_50, ta)
+                .reply()
+                .is_some()
+        })
         .count();
     let p = detected as f64 / trials as f64;
     assert!(rel(p, 0.5).abs() < 0.10, "p(r50) {p}");
     assert!(spec.detection_probability(0.0) > 0.999_999);
     assert!(spec.detection_probability(2500.0) < 0.01);
+}
+
+/// The default detection jitter (0.4 ms) on top of the clock: the direct
+/// replies' round trips scatter by √(σ² + Δ²/12) about the truth less half
+/// a tick (the clock floors).
+#[test]
+fn lbl_timing_jitter_has_its_sigma() {
+    let spec = LblSpec {
+        multipath_probability: 0.0,
+        ..LblSpec::default()
+    };
+    assert_eq!(spec.timing_jitter_sigma, 0.4e-3);
+    let mut lbl = LblNoise::new(spec).expect("spec");
+    let mut r = rng(11);
+    let (range, ta) = (500.0, 12.5e-3);
+    let true_rt = 2.0 * range / spec.sound_speed + ta;
+    let err: Vec<f64> = (0..50_000)
+        .filter_map(|_| lbl.next(&mut r, range, ta).reply())
+        .map(|reply| reply.round_trip - true_rt)
+        .collect();
+    let (mean, std) = mean_std(&err);
+    let want = (spec.timing_jitter_sigma.powi(2) + spec.clock_resolution.powi(2) / 12.0).sqrt();
+    assert!(rel(std, want).abs() < 0.02, "σ {std} against {want}");
+    assert!(
+        (mean + 0.5 * spec.clock_resolution).abs() < 1e-5,
+        "mean {mean}"
+    );
 }
 
 #[test]
@@ -282,7 +318,7 @@ fn same_seed_same_series_other_seed_differs() {
             ..LblSpec::default()
         })
         .expect("spec");
-        (0..5000).map(|_| l.next(&mut r, 1900.0)).collect()
+        (0..5000).map(|_| l.next(&mut r, 1900.0, 12.5e-3)).collect()
     }
     fn modem(seed: u64) -> Vec<ModemOutcome> {
         let mut r = rng(seed);
