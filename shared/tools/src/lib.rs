@@ -14,6 +14,7 @@ pub mod export;
 pub mod import;
 pub mod lbl_plan;
 pub mod part_file;
+pub mod smooth;
 pub mod presets;
 pub mod progress;
 pub mod report;
