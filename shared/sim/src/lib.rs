@@ -17,10 +17,14 @@
 //!   the generator that steps the truth and the sensors together.
 //! - [`suite`]: the seeded sensor suite that turns each truth step into the
 //!   measurements due (IMU, AHRS, DVL, depth, GPS, propeller, buoy modem, LBL).
+//! - [`ains_inputs`], [`lbl_inputs`]: a step's readings as an estimator's
+//!   inputs, for running one in process (the LBL one in lock step with the
+//!   transponders, as the sensor process keeps it).
 
 pub mod ains_inputs;
 pub mod environment;
 pub mod guidance;
+pub mod lbl_inputs;
 pub mod manoeuvre;
 pub mod mission;
 pub mod noise;

@@ -120,13 +120,7 @@ impl Lbl {
                 k: params.propeller_m_per_rad.unwrap_or_default(),
             },
         };
-        // Over the ground the current is not in the dynamics: it keeps its
-        // value and its variance.
-        let q_current = if matches!(dynamics, Dynamics::OverGround) {
-            0.0
-        } else {
-            params.q_current_m2_s3
-        };
+        let q_current = params.q_current_m2_s3;
         let model = Model {
             dynamics,
             q: [
@@ -433,6 +427,9 @@ impl Lbl {
             return;
         };
         let nu = r.range_m - r_star;
+        if r.after_gap {
+            kf.decorrelate_position();
+        }
         if r.reacquire {
             kf.p[(0, 0)] += nu * nu;
             kf.p[(1, 1)] += nu * nu;
@@ -661,8 +658,6 @@ impl Lbl {
                 format!("a reply from transponder {id}, which the site does not have"),
             ));
         };
-        self.match_ping(r)?;
-        self.st.stats.replies += 1;
         let elapsed_s = r.stamp_ns.saturating_sub(r.interrogation_stamp_ns) as f64 * 1e-9;
         let range_m = range_of_round_trip(
             r.round_trip_s,
@@ -684,6 +679,10 @@ impl Lbl {
                 ),
             ));
         }
+        // Checked before matching, so that a garbled reading does not use
+        // up its interrogation.
+        self.match_ping(r)?;
+        self.st.stats.replies += 1;
         let mid_ns =
             r.interrogation_stamp_ns + (r.stamp_ns - r.interrogation_stamp_ns.min(r.stamp_ns)) / 2;
         let t_state = self
@@ -709,6 +708,7 @@ impl Lbl {
             .last_accept_ns
             .is_some_and(|l| r.stamp_ns.saturating_sub(l) as f64 * 1e-9 >= self.params.reacquire_s);
         let reacquire = !accepted && self.st.refused_in_row >= self.params.reacquire_after && stale;
+        let after_gap = stale;
         self.st.last = LastRange {
             innovation_m: nu,
             transponder_id: id,
@@ -745,6 +745,7 @@ impl Lbl {
                 range_m,
                 mid_ns,
                 reacquire,
+                after_gap,
             });
         }
         Ok(())
@@ -757,25 +758,29 @@ impl Lbl {
         let slack_ns = ((2.0 * self.params.clock_resolution_s).max(1e-3) * 1e9) as u64;
         let now = r.stamp_ns;
         if self.replay {
-            let seen = self
-                .st
-                .pings
-                .recent
-                .iter()
-                .any(|p| p.transponder_id == id && p.stamp_ns == r.interrogation_stamp_ns);
-            if seen {
-                self.st.stats.duplicate_replies += 1;
-                return Err(refuse(
-                    "duplicate_reply",
-                    "a second reply to one interrogation",
-                ));
+            let recent = &mut self.st.pings.recent;
+            match recent
+                .iter_mut()
+                .find(|p| p.transponder_id == id && p.stamp_ns == r.interrogation_stamp_ns)
+            {
+                Some(p) if p.answered => {
+                    self.st.stats.duplicate_replies += 1;
+                    return Err(refuse(
+                        "duplicate_reply",
+                        "a second reply to one interrogation",
+                    ));
+                }
+                // The filter's own ping of that instant (the same schedule).
+                Some(p) => p.answered = true,
+                None => {
+                    recent.push(SentPing {
+                        transponder_id: id,
+                        stamp_ns: r.interrogation_stamp_ns,
+                        answered: true,
+                    });
+                    self.forget_old_pings(now);
+                }
             }
-            self.st.pings.recent.push(SentPing {
-                transponder_id: id,
-                stamp_ns: r.interrogation_stamp_ns,
-                answered: true,
-            });
-            self.forget_old_pings(now);
             return Ok(());
         }
         let pings = &mut self.st.pings;

@@ -62,6 +62,17 @@ impl<const N: usize> Kf<N> {
         }
     }
 
+    /// Drops the correlation of the position with the other states (their
+    /// variances kept).
+    pub fn decorrelate_position(&mut self) {
+        for i in 0..2 {
+            for j in 2..N {
+                self.p[(i, j)] = 0.0;
+                self.p[(j, i)] = 0.0;
+            }
+        }
+    }
+
     /// `P_xy`.
     pub fn p_xy(&self) -> [[f64; 2]; 2] {
         [

@@ -14,9 +14,11 @@
 //!   the position;
 //! - `k` estimated (5 states `[x, y, w_x, w_y, k]`): `u = 0` and `A` has
 //!   `∂ẋ/∂k = a` too (eq. 3 is then bilinear, exact in `E` for held inputs);
-//! - `velocity_source = "dvl"` (4 states): `u = a`, the velocity over the
-//!   ground, and `A = 0`: the current is not in the dynamics (it keeps its
-//!   last value and variance).
+//! - `velocity_source = "dvl"` (4 states): `u = a`, the DVL's velocity over
+//!   the ground; `(w_x, w_y)` is then what that velocity misses, mostly the
+//!   AHRS heading's error times the speed (a random walk as the current is:
+//!   without it a 2° heading bias drifts the estimate by 0.04 m/s), and
+//!   `A` couples it as it couples the current.
 //!
 //! `A` is nilpotent (`A² = 0`: only the position rows are non-zero, and
 //! only columns of the other states), so the transition matrix of
@@ -39,7 +41,7 @@ pub enum Dynamics {
     },
     /// Propeller with `k` the fifth state.
     PropellerEstimatedK,
-    /// A velocity over the ground (DVL bottom track).
+    /// A velocity over the ground (DVL bottom track); `w` is its error.
     OverGround,
 }
 
@@ -70,9 +72,10 @@ pub struct Discrete<const N: usize> {
 }
 
 impl Model {
-    /// Whether the current `(w_x, w_y)` moves the position.
+    /// Whether the current `(w_x, w_y)` moves the position (in every form
+    /// of eq. 3; kept as a question for the range model's sake).
     pub fn current_moves_position(&self) -> bool {
-        !matches!(self.dynamics, Dynamics::OverGround)
+        true
     }
 
     /// The factor of `a` in the velocity: `k`, the state's `k`, or 1.
@@ -210,13 +213,13 @@ mod tests {
     }
 
     #[test]
-    fn over_ground_leaves_the_current_out() {
+    fn over_ground_the_velocity_is_the_input() {
         let m = Model {
             dynamics: Dynamics::OverGround,
             q: [0.1, 0.1, 0.0, 0.0, 0.0],
         };
         let d = m.discrete::<4>([1.0, -2.0], 0.5);
-        assert_eq!(d.phi, SMatrix::<f64, 4, 4>::identity());
         assert_eq!((d.b[0], d.b[1]), (0.5, -1.0));
+        assert_eq!((d.phi[(0, 2)], d.phi[(1, 3)]), (0.5, 0.5));
     }
 }

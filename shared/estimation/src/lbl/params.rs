@@ -19,9 +19,10 @@ pub enum VelocitySource {
     /// current `(w_x, w_y)`.
     Propeller,
     /// A DVL's bottom-track velocity (`sensor/dvl`) rotated to north and
-    /// east with the AHRS's attitude: a velocity over the ground, so the
-    /// current states are not in the dynamics (for vehicles and imported
-    /// logs with a speed log instead of a propeller model).
+    /// east with the AHRS's attitude: a velocity over the ground, whose
+    /// error (the heading's, mostly) the `w` states then take instead of the
+    /// current (for vehicles and imported logs with a speed log instead of
+    /// a propeller model).
     Dvl,
 }
 
@@ -62,15 +63,15 @@ pub struct LblParams {
     pub rate_hz: f64,
     /// `Q`'s position entries (eq. 4), m²/s: the white part of the error of
     /// the dead-reckoned velocity (heading noise, shaft noise, turns the
-    /// steady-state model does not describe). Default 0.003.
+    /// steady-state model does not describe). Default 0.001.
     pub q_position_m2_s: f64,
     /// `Q`'s current entries (eq. 4), (m/s)²/s: how fast `w_x`, `w_y`
     /// may wander (the current's own change, and the slowly varying heading
     /// bias that a 4-state model can only see as current). Default 1e-5.
     pub q_current_m2_s3: f64,
-    /// `√q`: σ of a range measurement, m (§V-C). Default 0.4 (the
-    /// simulator's 0.4 ms timing jitter is 0.30 m, plus the clock's
-    /// quantisation and the model's own error).
+    /// `√q`: σ of a range measurement, m (§V-C). Default 0.32 (the
+    /// simulator's 0.4 ms detection jitter is 0.30 m of range, the clock's
+    /// 100 µs quantisation 0.02 m, the sound speed's error a few cm).
     pub range_sigma_m: f64,
     /// `γ`: a range is used when `‖r − r*‖²_{S⁻¹} ≤ γ` (§V-C). Default 9
     /// (3 σ).
@@ -126,9 +127,9 @@ impl Default for LblParams {
             k_sigma_rel: 0.05,
             q_k: 0.0,
             rate_hz: 10.0,
-            q_position_m2_s: 0.003,
+            q_position_m2_s: 0.001,
             q_current_m2_s3: 1e-5,
-            range_sigma_m: 0.4,
+            range_sigma_m: 0.32,
             gate: 9.0,
             selection: Selection::FigureOfMerit,
             interval_s: 0.0,

@@ -79,6 +79,10 @@ pub struct PendingRange {
     /// Accepted by the re-acquisition rule: the position's covariance is
     /// widened to the innovation first.
     pub reacquire: bool,
+    /// The first range after `reacquire_s` without one: the position's
+    /// correlation with the other states is dropped first (the error a long
+    /// silence left is the heading's more than the current's).
+    pub after_gap: bool,
 }
 
 /// A GPS fix at the surface, to be applied at the next step.

@@ -508,8 +508,22 @@ impl LblNoise {
         &self.spec
     }
 
-    /// One interrogation of a transponder of turnaround `turnaround` (s) at
-    /// true slant range `range` (m).
+    /// The detection jitter ε of one reply, s (N(0, σ²); no draw when σ is
+    /// 0). The suite draws it when the reply leaves the transponder, so
+    /// that the reply is heard, and delivered, at its jittered time (a
+    /// reply is never stamped before a step already published), and passes
+    /// it to [`LblNoise::next`] inside `turnaround`.
+    pub fn jitter<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        if self.spec.timing_jitter_sigma > 0.0 {
+            self.spec.timing_jitter_sigma * std_normal(rng)
+        } else {
+            0.0
+        }
+    }
+
+    /// One interrogation of a transponder of turnaround `turnaround` (s,
+    /// with the reply's detection jitter added, [`LblNoise::jitter`]) at true
+    /// slant range `range` (m).
     pub fn next<R: Rng + ?Sized>(
         &mut self,
         rng: &mut R,
@@ -522,9 +536,6 @@ impl LblNoise {
         }
         let multipath = chance(rng, s.multipath_probability);
         let mut t = 2.0 * range / s.sound_speed + turnaround;
-        if s.timing_jitter_sigma > 0.0 {
-            t += s.timing_jitter_sigma * std_normal(rng);
-        }
         if multipath {
             t += uniform(rng, s.multipath_delay[0], s.multipath_delay[1]);
         }

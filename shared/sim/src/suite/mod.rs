@@ -37,8 +37,10 @@
 //!   time and delivered at the step that contains it.
 //! - LBL: [`SensorSuite::interrogate`] registers a ping at `stamp_ns`. Outbound
 //!   leg from the vehicle position at `stamp_ns` (interpolated between steps)
-//!   to the transponder, turnaround t_ta, return leg to the moving vehicle as
-//!   above. [`LblNoise`] then gets the effective range (d_out + d_back) / 2, so
+//!   to the transponder, turnaround t_ta and the reply's detection jitter
+//!   ε (drawn then, its own stream), return leg to the moving vehicle as
+//!   above (the reply is heard at the jittered time, so it is delivered at
+//!   the step that holds its stamp, never before one already published). [`LblNoise`] then gets the effective range (d_out + d_back) / 2, so
 //!   its 2r/c + t_ta is the true two-way time; it decides detection and
 //!   multipath and quantises to the 100 µs clock. The reply is stamped
 //!   `stamp_ns + ticks · Δ` and delivered at the step where the direct
@@ -96,6 +98,9 @@ mod stream {
     pub const GPS_VELOCITY: u64 = 13;
     /// The modem's multipath outliers, apart from its losses and jitter.
     pub const MODEM_MULTIPATH: u64 = 14;
+    /// LBL detection jitter, apart from detection and multipath (a run
+    /// without jitter has the same replies and outliers).
+    pub const LBL_JITTER: u64 = 15;
 }
 
 fn sensor_rng(seed: u64, stream: u64) -> ChaCha8Rng {
@@ -247,7 +252,12 @@ enum PingLeg {
     /// Send time not reached by the steps yet.
     Waiting,
     /// Reply emitted from the transponder at `emit_s`, travelling back.
-    Returning { d_out: f64, emit_s: f64 },
+    Returning {
+        d_out: f64,
+        emit_s: f64,
+        /// The reply's detection jitter, s (in `emit_s` already).
+        jitter_s: f64,
+    },
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -261,6 +271,7 @@ struct Ping {
 struct LblState {
     noise: LblNoise,
     rng: ChaCha8Rng,
+    jitter_rng: ChaCha8Rng,
     tick_ns: u64,
     pings: Vec<Ping>,
     replies: Vec<LblReplyReading>,
@@ -378,6 +389,7 @@ impl SensorSuite {
             Some(LblState {
                 noise: LblNoise::new(spec)?,
                 rng: sensor_rng(seed, stream::LBL),
+                jitter_rng: sensor_rng(seed, stream::LBL_JITTER),
                 tick_ns: stamp_ns(spec.clock_resolution).max(1),
                 pings: Vec::new(),
                 replies: Vec::new(),
@@ -456,7 +468,7 @@ impl SensorSuite {
         if let Some(last) = &self.prev
             && send_ns <= self::stamp_ns(last.t_s)
         {
-            ping.leg = outbound(self.sound_speed_m_s, &ping, &position(last));
+            ping.leg = outbound(self.sound_speed_m_s, lbl, &ping, &position(last));
         }
         lbl.pings.push(ping);
         self.stats.lbl_interrogations += 1;
@@ -700,10 +712,15 @@ impl SensorSuite {
                     Some(pr) => position(pr),
                     None => p1,
                 };
-                ping.leg = outbound(c, &ping, &p);
+                ping.leg = outbound(c, s, &ping, &p);
                 s.pings[i] = ping;
             }
-            let PingLeg::Returning { d_out, emit_s } = ping.leg else {
+            let PingLeg::Returning {
+                d_out,
+                emit_s,
+                jitter_s,
+            } = ping.leg
+            else {
                 i += 1;
                 continue;
             };
@@ -717,7 +734,7 @@ impl SensorSuite {
             let d_back = c * (t_r - emit_s);
             let r_eff = 0.5 * (d_out + d_back);
             let true_rt = (d_out + d_back) / c + tx.turnaround_s;
-            let outcome = s.noise.next(&mut s.rng, r_eff, tx.turnaround_s);
+            let outcome = s.noise.next(&mut s.rng, r_eff, tx.turnaround_s + jitter_s);
             // The draws are made whatever the blackout: a run with one
             // differs from one without only by the replies it loses.
             if blackout.is_some_and(|[a, b]| t_r >= a && t_r <= b) {
@@ -760,13 +777,17 @@ impl SensorSuite {
     }
 }
 
-/// The outbound leg of a ping from vehicle position `p` at its send time.
-fn outbound(c: f64, ping: &Ping, p: &Vector3<f64>) -> PingLeg {
+/// The outbound leg of a ping from vehicle position `p` at its send time;
+/// the reply's detection jitter is drawn now and carried by the return leg
+/// (the reply is heard at the jittered time).
+fn outbound(c: f64, s: &mut LblState, ping: &Ping, p: &Vector3<f64>) -> PingLeg {
     let tx = &ping.transponder;
     let d_out = (Vector3::new(tx.north_m, tx.east_m, tx.depth_m) - p).norm();
+    let jitter_s = s.noise.jitter(&mut s.jitter_rng);
     PingLeg::Returning {
         d_out,
-        emit_s: seconds(ping.send_ns) + d_out / c + tx.turnaround_s,
+        emit_s: seconds(ping.send_ns) + d_out / c + tx.turnaround_s + jitter_s,
+        jitter_s,
     }
 }
 

@@ -381,6 +381,24 @@ fn lbl_closed_loop(config: SuiteConfig, seed: u64) -> ClosedLoop {
     (asked, replies, steps)
 }
 
+/// With the detection jitter, a reply is delivered at the step that holds
+/// its stamp: never stamped before the previous step (which the sensor may
+/// already have covered with a watermark), never after its own.
+#[test]
+fn jittered_replies_are_delivered_at_their_stamp() {
+    let config = SuiteConfig::lbl(LblLayout::Two);
+    assert!(config.lbl.noise.timing_jitter_sigma > 0.0);
+    let (_, replies, _) = lbl_closed_loop(config, 6);
+    assert!(replies.len() > 100);
+    for (r, delivered) in &replies {
+        assert!(r.stamp_ns <= *delivered, "{r:?} at {delivered}");
+        assert!(
+            r.stamp_ns + 10_000_000 >= *delivered,
+            "{r:?} at {delivered}"
+        );
+    }
+}
+
 /// A blackout window loses exactly the replies heard in it: the same
 /// pings outside it give the same replies, bit for bit.
 #[test]

@@ -248,7 +248,10 @@ fn lbl_timing_jitter_has_its_sigma() {
     let (range, ta) = (500.0, 12.5e-3);
     let true_rt = 2.0 * range / spec.sound_speed + ta;
     let err: Vec<f64> = (0..50_000)
-        .filter_map(|_| lbl.next(&mut r, range, ta).reply())
+        .filter_map(|_| {
+            let eps = lbl.jitter(&mut r);
+            lbl.next(&mut r, range, ta + eps).reply()
+        })
         .map(|reply| reply.round_trip - true_rt)
         .collect();
     let (mean, std) = mean_std(&err);
