@@ -64,7 +64,7 @@ fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result
         "ekf" => AinsParams::Ekf(manifest.params(process, Some(variant))?),
         _ => AinsParams::Pf(manifest.params(process, Some(variant))?),
     };
-    let site = manifest.site.with_context(|| {
+    let site = manifest.site.clone().with_context(|| {
         format!(
             "{}: the manifest has no [site]: the aided INS needs the position and declination",
             manifest.path.display()

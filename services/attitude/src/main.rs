@@ -42,7 +42,7 @@ fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result
         "pf" => VariantParams::Pf(manifest.params(process, Some(variant))?),
         _ => VariantParams::Gyro(manifest.params(process, Some(variant))?),
     };
-    let site = manifest.site.with_context(|| {
+    let site = manifest.site.clone().with_context(|| {
         format!(
             "{}: the manifest has no [site]: the attitude needs the latitude and declination",
             manifest.path.display()

@@ -100,13 +100,29 @@ struct Setup {
 /// (what `--check` validates and `serve` runs).
 fn setup(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result<Setup> {
     let place = format!("{}: process.{process}.params", manifest.path.display());
-    let params = SensorParams::from_table(manifest.params(process, Some(variant))?, &place)?;
-    let site = manifest.site.with_context(|| {
+    let table: toml::Table = manifest.params(process, Some(variant))?;
+    let listed = table
+        .get("sensors")
+        .and_then(|s| s.get("lbl"))
+        .and_then(|l| l.get("transponders"))
+        .is_some();
+    let mut params = SensorParams::from_table(table, &place)?;
+    let site = manifest.site.clone().with_context(|| {
         format!(
             "{}: the manifest has no [site] (latitude_deg, longitude_deg)",
             manifest.path.display()
         )
     })?;
+    // The simulator's transponders are the site's (what the vehicle is told
+    // of its acoustic field is the field it gets).
+    if !site.transponders.is_empty() {
+        if listed {
+            anyhow::bail!(
+                "{place}.sensors.lbl.transponders: the site's transponders ([site] or lbl_layout) are the simulator's; give them once"
+            );
+        }
+        params.sensors.lbl.transponders = site.transponders.clone();
+    }
     let (duration_s, seed) = (manifest.run.duration_s, manifest.run.seed);
     let origin = Origin::from_degrees(site.latitude_deg, site.longitude_deg);
     let generator = Generator::new(

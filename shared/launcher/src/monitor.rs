@@ -304,7 +304,7 @@ mod tests {
     #[test]
     fn every_estimate_stream_is_evaluated_and_digested() {
         let manifest = survey();
-        let site = manifest.site.expect("the survey has a site");
+        let site = manifest.site.clone().expect("the survey has a site");
         let mut obs = Observer::default();
         observe_run(&mut obs, &site, 0.01);
         let eval = obs.evaluate(&manifest).expect("an evaluation");

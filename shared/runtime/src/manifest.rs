@@ -19,7 +19,7 @@ use crate::manifest_limits::{check_process_name, launcher_flag, read_manifest};
 
 mod site;
 use site::RawSite;
-pub use site::{DeclinationSource, Site};
+pub use site::{DeclinationSource, SOUND_SPEED_RANGE_M_S, Site, TranspondersSource};
 
 /// `[run]`.
 #[derive(Debug, Clone, Deserialize)]
@@ -262,19 +262,40 @@ impl Manifest {
         };
         if let Some(site) = raw.site {
             // The place first: the model is asked only about a real one.
-            if !(site.latitude_deg.abs() <= 90.0 && site.longitude_deg.abs() <= 180.0) {
-                m.site = Some(Site {
-                    latitude_deg: site.latitude_deg,
-                    longitude_deg: site.longitude_deg,
-                    magnetic_declination_deg: site.magnetic_declination_deg.unwrap_or(0.0),
-                    declination_from: DeclinationSource::Manifest,
-                });
+            let mut site = if !(site.latitude_deg.abs() <= 90.0
+                && site.longitude_deg.abs() <= 180.0)
+            {
+                RawSite {
+                    magnetic_declination_deg: Some(site.magnetic_declination_deg.unwrap_or(0.0)),
+                    ..site
+                }
+                .resolve()
+                .map_err(|(key, e)| m.err(key, e))?
             } else {
-                m.site = Some(site.resolve().map_err(|(key, e)| m.err(key, e))?);
-            }
+                site.resolve().map_err(|(key, e)| m.err(key, e))?
+            };
+            site.resolve_acoustics(m.named_layout())
+                .map_err(|(key, e)| m.err(&key, e))?;
+            m.site = Some(site);
         }
         m.check()?;
         Ok(m)
+    }
+
+    /// The first process (by name) whose parameters name a transponder
+    /// layout (`params.lbl_layout`, or its variant's), with that name.
+    fn named_layout(&self) -> Option<(String, String)> {
+        self.processes.iter().find_map(|(name, p)| {
+            let in_variant = p
+                .variant
+                .as_ref()
+                .and_then(|v| p.variants.get(v))
+                .and_then(|t| t.get("lbl_layout"));
+            in_variant
+                .or_else(|| p.params.get("lbl_layout"))
+                .and_then(toml::Value::as_str)
+                .map(|layout| (name.clone(), layout.to_owned()))
+        })
     }
 
     /// An error about `key` (dotted, e.g. `process.attitude.bin`), naming the

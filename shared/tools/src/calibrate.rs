@@ -68,6 +68,7 @@ fn simulated(
     let params = SensorParams::from_table(table, &place)?;
     let site = manifest
         .site
+        .clone()
         .with_context(|| format!("{}: no [site]", path.display()))?;
     let origin = Origin::from_degrees(site.latitude_deg, site.longitude_deg);
     let env = params

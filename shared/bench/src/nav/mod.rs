@@ -280,7 +280,7 @@ pub fn survey_manifest() -> anyhow::Result<Manifest> {
 pub fn survey_attitude() -> anyhow::Result<AttitudeCore> {
     let m = survey_manifest()?;
     let params = VariantParams::Pf(m.params("attitude", Some("pf"))?);
-    let site = m.site.context("launch/survey.toml has no [site]")?;
+    let site = m.site.clone().context("launch/survey.toml has no [site]")?;
     AttitudeCore::new(
         &params,
         site.latitude_deg.to_radians(),

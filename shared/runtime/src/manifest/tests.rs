@@ -287,3 +287,80 @@ fn a_site_without_declination_takes_the_world_magnetic_models() {
         .to_string();
     assert!(e.contains("magnetic_declination_deg"), "{e}");
 }
+
+/// Issue 15: `[site]` holds the transponders and the sound speed the
+/// vehicle assumes; a process's `lbl_layout` names them when `[site]` lists
+/// none (`--set sensor.params.lbl_layout=Four` gives four everywhere); both
+/// at once, an unknown layout, coincident transponders and an impossible
+/// sound speed are refused with the key.
+#[test]
+fn the_site_holds_the_transponders() {
+    let with = |site: &str, params: &str| {
+        GOOD.replace(
+            "longitude_deg = -9.1\n",
+            &format!("longitude_deg = -9.1\nmagnetic_declination_deg = 0.0\n{site}"),
+        )
+        .replace("params = { publish = true }", params)
+    };
+    let listed = with(
+        "sound_speed_m_s = 1507.5\ntransponders = [\n  { id = 1, north_m = 0.0, east_m = 0.0, depth_m = 20.0 },\n  { id = 2, north_m = 600.0, east_m = 0.0, depth_m = 20.0, turnaround_s = 0.02 },\n]\n",
+        "params = { publish = true }",
+    );
+    let s = Manifest::parse(Path::new("m.toml"), &listed)
+        .expect("parses")
+        .site
+        .expect("a site");
+    assert_eq!(s.sound_speed_m_s, Some(1507.5));
+    assert_eq!(s.transponders.len(), 2);
+    assert_eq!(s.transponders[1].turnaround_s, 0.02);
+    assert_eq!(s.transponders[0].turnaround_s, 0.0125);
+    assert_eq!(s.transponders_from, TranspondersSource::Manifest);
+    assert!(s.layout().is_some());
+
+    let named = with("", "params = { publish = true, lbl_layout = \"Two\" }");
+    let path = std::env::temp_dir().join(format!("nauta-site-{}.toml", std::process::id()));
+    std::fs::write(&path, &named).expect("write");
+    let m =
+        Manifest::load_with(&path, &["attitude.params.lbl_layout=Four".into()]).expect("parses");
+    let s = m.site.expect("a site");
+    assert_eq!(s.transponders.len(), 4, "--set names four");
+    assert_eq!(
+        s.transponders_from,
+        TranspondersSource::Layout {
+            process: "attitude".into(),
+            name: "Four".into()
+        }
+    );
+    let _ = std::fs::remove_file(&path);
+
+    let err = |text: &str| {
+        Manifest::parse(Path::new("m.toml"), text)
+            .expect_err("refused")
+            .to_string()
+    };
+    let both = listed.replace(
+        "params = { publish = true }",
+        "params = { lbl_layout = \"Two\" }",
+    );
+    let e = err(&both);
+    assert!(
+        e.contains("process.attitude.params.lbl_layout") && e.contains("keep one"),
+        "{e}"
+    );
+    let e = err(&named.replace("\"Two\"", "\"Three\""));
+    assert!(e.contains("unknown layout \"Three\""), "{e}");
+    let e = err(&listed.replace("north_m = 600.0", "north_m = 0.2"));
+    assert!(
+        e.contains("site.transponders") && e.contains("cannot tell a position apart"),
+        "{e}"
+    );
+    let e = err(&listed.replace("id = 2", "id = 1"));
+    assert!(e.contains("id 1 is given twice"), "{e}");
+    let e = err(&listed.replace("1507.5", "150.0"));
+    assert!(
+        e.contains("m.toml:") && e.contains("site.sound_speed_m_s"),
+        "{e}"
+    );
+    let e = err(&listed.replace("depth_m = 20.0 }", "depth = 20.0 }"));
+    assert!(e.contains("depth"), "{e}");
+}

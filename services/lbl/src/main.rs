@@ -1,0 +1,80 @@
+//! `nauta-lbl`: the LBL role (DESIGN §2; paper 003 §V). Wiring only: the
+//! estimator is [`Lbl`] (in `nauta-estimation`: `ekf`, paper 003's EKF of
+//! position and current from transponder ranges and propeller dead
+//! reckoning), its lifecycle the runtime's estimator shell.
+//!
+//! Inputs (ties at one stamp are taken in this order, the AHRS first so that
+//! the 10 Hz step at a grid point is taken before anything else of its
+//! stamp): the sensor's AHRS, depth, propeller, DVL (used with
+//! `velocity_source = "dvl"`), LBL replies and GPS. Outputs: `lbl/nav` at
+//! every step (10 Hz) and `lbl/interrogate`, stamped at the step it is
+//! decided (the sensor's lock step: the interrogator pings at its "now").
+//! The transponders, the sound speed, the declination and the local origin
+//! are the manifest's `[site]`.
+
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use clap::Parser;
+use nauta_estimation::lbl::{Lbl, LblInput, LblOutput, LblParams, LblSite, VARIANTS};
+use nauta_messages::{LblInterrogation, LblSnapshot, LblSolution, Role};
+use nauta_runtime::process::ProcessArgs;
+use nauta_runtime::{Manifest, Shell, services};
+
+/// Navigates by ranges to long-baseline transponders.
+#[derive(Debug, Parser)]
+#[command(name = "nauta-lbl", version, about)]
+struct Args {
+    #[command(flatten)]
+    process: ProcessArgs,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    Shell::<Lbl>::new(Role::Lbl, &VARIANTS)
+        .input(services::ahrs(), Role::Sensor, LblInput::Ahrs)
+        .input(services::depth(), Role::Sensor, LblInput::Depth)
+        .input(services::propeller(), Role::Sensor, LblInput::Propeller)
+        .input(services::dvl(), Role::Sensor, LblInput::Dvl)
+        .input(services::lbl_reply(), Role::Sensor, LblInput::Reply)
+        .input(services::gps(), Role::Sensor, LblInput::Gps)
+        .output(services::lbl_solution(), |o| match o {
+            LblOutput::Nav(n) => Some(LblSolution::from(n)),
+            LblOutput::Ping(_) => None,
+        })
+        .output(services::lbl_interrogate(), |o| match o {
+            LblOutput::Ping(p) => Some(LblInterrogation::from(p)),
+            LblOutput::Nav(_) => None,
+        })
+        .snapshot(
+            services::snapshot(Role::Lbl),
+            LblSnapshot::of_saved,
+            LblSnapshot::saved,
+        )
+        .main(&args.process, core_for)
+}
+
+/// The core with its parameters from the manifest and its site.
+fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result<Lbl> {
+    let file = manifest.path.display();
+    let params: LblParams = manifest.params(process, Some(variant))?;
+    let site = manifest
+        .site
+        .as_ref()
+        .with_context(|| format!("{file}: the manifest has no [site]: LBL needs the origin, the transponders and the sound speed"))?;
+    let layout = site.layout().with_context(|| {
+        format!("{file}: [site] has no transponders (site.transponders, or a process's lbl_layout)")
+    })?;
+    let sound_speed_m_s = site.sound_speed_m_s.with_context(|| {
+        format!("{file}: [site] has no sound_speed_m_s (the sound speed the vehicle assumes, m/s)")
+    })?;
+    site.log_declination();
+    let lbl_site = LblSite {
+        origin_lat_rad: site.latitude_deg.to_radians(),
+        origin_lon_rad: site.longitude_deg.to_radians(),
+        declination_rad: site.magnetic_declination_deg.to_radians(),
+        sound_speed_m_s,
+        layout,
+    };
+    Lbl::new(&params, lbl_site).with_context(|| format!("{file}: process.{process}"))
+}
