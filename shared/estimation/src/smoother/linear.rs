@@ -86,6 +86,14 @@ impl<const N: usize> LinearForward<N> {
         });
     }
 
+    /// Replaces the current step's posterior (a reset that discards the
+    /// prior, such as a GPS fix at the surface; the smoother restarts there).
+    pub fn reset(&mut self, x: SVector<f64, N>, p: SMatrix<f64, N, N>) {
+        let n = self.steps.len() - 1;
+        self.steps[n].x_post = x;
+        self.steps[n].p_post = p;
+    }
+
     /// Corrects the current step with `z = H x + v`, `v ~ N(0, R)`:
     /// `K = P Hᵀ S⁻¹`, `x += K (z − H x)`, `P` in Joseph form `(I − K H) P
     /// (I − K H)ᵀ + K R Kᵀ`.

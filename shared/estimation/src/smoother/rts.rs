@@ -21,6 +21,18 @@
 //! is what the forward pass predicted), so a filter that integrates eqs.
 //! 3-4 more finely than `φ_i` is smoothed about its own prediction.
 //!
+//! **Restarts.** Eqs. 7-9 assume that each posterior is the prior corrected
+//! by measurements (eqs. 5-6), so that `P_i ≤ P⁻_i`. A filter may instead
+//! discard its prior: reset the position to a GPS fix at the surface, or
+//! widen `P` to re-acquire after a blackout. Such a step knows less than
+//! its prior in some direction (`P_i − P⁻_i` has a positive eigenvalue), and
+//! carrying its jump back through eq. 7 would move the whole track before
+//! it (with `K_i ≈ I` between two corrections) and inflate `P_{i|N}` above
+//! `P_i`. The backward pass therefore restarts there, as at the end of the
+//! mission: the step before it keeps its filtered estimate
+//! (`E_{i|N} = E_i`, `P_{i|N} = P_i`), and each stretch between restarts is
+//! smoothed on its own ([`is_restart`]).
+//!
 //! The cost is a few 4×4 products and one Cholesky per step, with no
 //! allocation but the output's.
 
@@ -91,6 +103,16 @@ fn backward<const N: usize>(
                 field: StepField::PPrior,
             });
         };
+        if is_restart(next) {
+            out[i] = SmoothedStep {
+                stamp_ns: step.stamp_ns,
+                x: step.x_post,
+                p: step.p_post,
+            };
+            x_next = step.x_post;
+            p_next = step.p_post;
+            continue;
+        }
         // Eq. 8: P⁻_{i+1} K_iᵀ = φ_i P_i.
         let gain = chol.solve(&(next.phi * step.p_post)).transpose();
         // Eq. 7.
@@ -128,6 +150,23 @@ fn backward<const N: usize>(
         p_next = p;
     }
     Ok(())
+}
+
+/// Relative size of a positive eigenvalue of `P_i − P⁻_i` that makes a
+/// restart (rounding in a correction stays far below).
+const RESTART_TOLERANCE: f64 = 1e-9;
+
+/// Whether `step`'s posterior discards its prior (module docs, "Restarts"):
+/// `P⁻_i − P_i` is not positive semi-definite, to
+/// [`RESTART_TOLERANCE`] of `trace P⁻_i`. A step without a correction
+/// (posterior equal to the prior) is none.
+pub fn is_restart<const N: usize>(step: &ForwardStep<N>) -> bool {
+    if step.p_post == step.p_prior {
+        return false;
+    }
+    let slack = RESTART_TOLERANCE * step.p_prior.trace().abs();
+    let d = step.p_prior - step.p_post + SMatrix::<f64, N, N>::identity() * slack;
+    d.cholesky().is_none()
 }
 
 fn check_stamps<const N: usize>(steps: &[ForwardStep<N>]) -> Result<(), SmoothError> {

@@ -111,6 +111,15 @@ fn rts_equals_the_batch_solution_of_a_linear_system() {
 
 /// A random linear system of dimension 3 with scarce scalar measurements.
 fn random_pass(seed: u64, steps: usize) -> Vec<ForwardStep<3>> {
+    random_pass_with(seed, steps, |_, _| {})
+}
+
+/// [`random_pass`], `edit(i, filter)` called after each step's corrections.
+fn random_pass_with(
+    seed: u64,
+    steps: usize,
+    mut edit: impl FnMut(usize, &mut LinearForward<3>),
+) -> Vec<ForwardStep<3>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut u = |s: f64| rng.random_range(-s..s);
     let x0 = SVector::<f64, 3>::new(u(10.0), u(10.0), u(1.0));
@@ -128,6 +137,7 @@ fn random_pass(seed: u64, steps: usize) -> Vec<ForwardStep<3>> {
             let r = SMatrix::<f64, 1, 1>::new(0.01 + u(1.0).abs());
             f.update(&Vector1::new(u(20.0)), &h, &r).expect("update");
         }
+        edit(i, &mut f);
     }
     f.into_steps()
 }
@@ -368,4 +378,35 @@ fn bad_dynamics_are_refused() {
     let zero = Discretised::of(&a, &q, &c, 0.0).expect("zero step");
     assert_eq!(zero.phi, Matrix2::identity());
     assert_eq!(zero.q, Matrix2::zeros());
+}
+
+#[test]
+fn a_reset_restarts_the_backward_pass() {
+    // Step 40 resets its state (a GPS fix at the surface): a posterior that
+    // knows less than its prior.
+    let k = 40;
+    let pass = random_pass_with(9, 60, |i, f| {
+        if i == k {
+            f.reset(
+                f.current().x_prior + SVector::<f64, 3>::new(25.0, -10.0, 0.0),
+                f.current().p_prior + SMatrix::identity() * 50.0,
+            );
+        }
+    });
+    assert!(is_restart(&pass[k]));
+    assert!(
+        !pass.iter().take(k).skip(1).any(is_restart),
+        "corrections are no restarts"
+    );
+    let out = smooth(&pass).expect("smooth");
+    // The step before keeps its filtered estimate, and the stretch before it
+    // is smoothed as if the mission ended there.
+    assert_eq!(out[k - 1].x, pass[k - 1].x_post);
+    assert_eq!(out[k - 1].p, pass[k - 1].p_post);
+    let alone = smooth(&pass[..k]).expect("smooth the first stretch");
+    assert_eq!(&out[..k], &alone[..]);
+    for (f, s) in pass.iter().zip(&out) {
+        let min = (f.p_post - s.p).symmetric_eigen().eigenvalues.min();
+        assert!(min >= -1e-9 * f.p_post.amax(), "{min}");
+    }
 }
