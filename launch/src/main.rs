@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 
 use nauta_bench as bench;
 use nauta_launcher::{launch, logcmd, pipeline};
-use nauta_tools::{calibrate, eval, export, import, lbl_plan, report};
+use nauta_tools::{calibrate, eval, export, import, lbl_plan, report, smooth};
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
 #[derive(Debug, Parser)]
@@ -97,6 +97,11 @@ enum Command {
         #[command(subcommand)]
         which: ImportCommand,
     },
+    /// Paper 004's post-mission smoother: the recording's LBL inputs through
+    /// its LBL filter again, then the fixed-interval Rauch-Tung-Striebel
+    /// backward pass; OUT is the recording plus the smoothed track
+    /// `smoother/lbl/nav` (`nauta smooth run.mcap -o smoothed.mcap`).
+    Smooth(smooth::command::SmoothArgs),
     /// LBL navigation: `nauta lbl plan LAYOUT -o MAP.png` maps paper 003's
     /// sensitivities and operating box of a transponder layout.
     Lbl {
@@ -268,6 +273,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             ImportCommand::Akit(args) => import::akit::akit(&args),
             ImportCommand::Csv(args) => import::csv::csv(&args),
         },
+        Command::Smooth(args) => smooth::command::run(&args),
         Command::Lbl { which } => match which {
             LblCommand::Plan(args) => lbl_plan::command::run(&args),
         },

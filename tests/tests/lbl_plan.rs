@@ -77,6 +77,14 @@ fn a_two_transponder_layout_gets_its_map_and_box() {
     assert_eq!(code, Some(0), "{err}");
     let w: Value = serde_json::from_str(&out).expect("one JSON object");
     assert_eq!(w["box"], v["box"]);
+    // And the shipped manifest of the lbl scenario (its sensor's
+    // `lbl_layout = "Two"` names them), as the interface runs it.
+    let manifest = nauta_tests::workspace_root().join("launch/lbl.toml");
+    let (code, out, err) = plan(&manifest, &map, true);
+    assert_eq!(code, Some(0), "{err}");
+    let m: Value = serde_json::from_str(&out).expect("one JSON object");
+    assert_eq!(m["baseline_m"], 600.0);
+    assert_eq!(m["box"], v["box"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

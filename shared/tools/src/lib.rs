@@ -4,7 +4,8 @@
 //! GPX, CSV, Foxglove), [`import`] (outside data sets into recordings),
 //! [`calibrate`] (magnetometer calibration from a recording or the
 //! simulator), [`lbl_plan`] (paper 003's sensitivity maps and operating box
-//! of a transponder layout). They read recordings through `nauta_log`'s one reader
+//! of a transponder layout), [`smooth`] (paper 004's post-mission smoother
+//! of a recording's LBL navigation). They read recordings through `nauta_log`'s one reader
 //! ([`nauta_log::streams`], [`nauta_log::run`]); [`presets`] is what the
 //! simulator adds to a recording's run metadata.
 
@@ -14,7 +15,7 @@ pub mod export;
 pub mod import;
 pub mod lbl_plan;
 pub mod part_file;
-pub mod smooth;
 pub mod presets;
 pub mod progress;
 pub mod report;
+pub mod smooth;

@@ -13,9 +13,11 @@ use super::{Plan, PlanOptions, map};
 /// Arguments of `nauta lbl plan`.
 #[derive(Debug, clap::Args)]
 pub struct PlanArgs {
-    /// The transponders: a CSV list (`.csv`: a header `id,north_m,east_m[,depth_m]`,
-    /// then one transponder per line, metres north/east of the site's origin),
-    /// or a `site.toml` of `nauta import csv` (its `[[transponders]]`).
+    /// The transponders: a manifest (its `[site]`'s transponders, or the
+    /// layout a process's `lbl_layout` names, e.g. `launch/lbl.toml`), a CSV
+    /// list (`.csv`: a header `id,north_m,east_m[,depth_m]`, then one
+    /// transponder per line, metres north/east of the site's origin), or a
+    /// `site.toml` of `nauta import csv` (its `[[transponders]]`).
     pub layout: PathBuf,
     /// The map to write (PNG): Figs. 2-3 as level contours with Fig. 4's box.
     #[arg(short = 'o', long = "output", value_name = "MAP.png")]
@@ -64,8 +66,19 @@ fn parse_start(text: &str) -> anyhow::Result<[f64; 2]> {
     Ok([num(n, "north")?, num(e, "east")?])
 }
 
-/// The layout of `path`: a CSV list (`.csv`), or the `site.toml` of
-/// `nauta import csv` (its `[[transponders]]`). Every error names the file.
+/// Whether the TOML file `path` is a manifest (it has `[run]` or
+/// `[process.*]`) rather than the `site.toml` of an import.
+fn is_manifest(path: &std::path::Path) -> anyhow::Result<bool> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let table: toml::Table = toml::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))?;
+    Ok(table.contains_key("run") || table.contains_key("process"))
+}
+
+/// The layout of `path`: a manifest (its site's transponders), a CSV list
+/// (`.csv`), or the `site.toml` of `nauta import csv` (its
+/// `[[transponders]]`). Every error names the file.
 pub fn read_layout(path: &std::path::Path) -> anyhow::Result<Layout> {
     use super::layout::{LayoutError, Transponder};
     let named = |e: LayoutError| match e {
@@ -79,15 +92,27 @@ pub fn read_layout(path: &std::path::Path) -> anyhow::Result<Layout> {
     if is_csv {
         return Layout::from_csv_file(path).map_err(named);
     }
-    let site = crate::import::csv::site::CsvSite::read(path)?;
-    let transponders = site
-        .transponders
-        .iter()
-        .map(|t| Transponder {
-            id: t.id,
-            north_m: t.north_m,
-            east_m: t.east_m,
-            depth_m: Some(t.depth_m),
+    // (id, north, east, depth) of the manifest's site or the import's.
+    let listed: Vec<(u32, f64, f64, f64)> = if is_manifest(path)? {
+        let manifest = nauta_runtime::Manifest::load(path)?;
+        let site = manifest.site.map(|s| s.transponders).unwrap_or_default();
+        site.iter()
+            .map(|t| (t.id, t.north_m, t.east_m, t.depth_m))
+            .collect()
+    } else {
+        let site = crate::import::csv::site::CsvSite::read(path)?;
+        site.transponders
+            .iter()
+            .map(|t| (t.id, t.north_m, t.east_m, t.depth_m))
+            .collect()
+    };
+    let transponders = listed
+        .into_iter()
+        .map(|(id, north_m, east_m, depth_m)| Transponder {
+            id,
+            north_m,
+            east_m,
+            depth_m: Some(depth_m),
         })
         .collect();
     Layout::new(transponders).map_err(named)

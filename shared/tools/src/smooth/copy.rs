@@ -66,14 +66,11 @@ pub fn copy_with_track<M: Message>(
             copied.replaced += 1;
             return Ok(());
         }
-        let info = types
-            .entry(ch.id)
-            .or_insert_with(|| {
-                (ch.message_encoding == nauta_log::MESSAGE_ENCODING)
-                    .then(|| registry::type_info(&ch.type_name))
-                    .flatten()
-            })
-            .clone();
+        let info = *types.entry(ch.id).or_insert_with(|| {
+            (ch.message_encoding == nauta_log::MESSAGE_ENCODING)
+                .then(|| registry::type_info(&ch.type_name))
+                .flatten()
+        });
         let Some(info) = info else {
             *copied.skipped.entry(ch.topic.clone()).or_default() += 1;
             return Ok(());

@@ -48,14 +48,11 @@ fn input_of(v: &Value) -> Option<LblInput> {
     })
 }
 
-/// Reads the LBL inputs of `path` (`dvl`: whether the filter reads
-/// `sensor/dvl`); `on_progress(bytes read, file bytes)`.
-pub fn read(
-    path: &Path,
-    dvl: bool,
-    on_progress: impl FnMut(u64, u64),
-) -> anyhow::Result<LoggedInputs> {
-    let wanted = |topic: &str| TOPICS.contains(&topic) && (dvl || topic != DVL_SERVICE);
+/// Reads the LBL inputs of `path` (all of them, as the service subscribes
+/// to all: the filter itself ignores the DVL unless it is its velocity
+/// source); `on_progress(bytes read, file bytes)`.
+pub fn read(path: &Path, on_progress: impl FnMut(u64, u64)) -> anyhow::Result<LoggedInputs> {
+    let wanted = |topic: &str| TOPICS.contains(&topic);
     // (stamp, declared order, file order, input)
     let mut keyed: Vec<(u64, usize, usize, LblInput)> = Vec::new();
     let mut rejected: BTreeMap<String, usize> = BTreeMap::new();

@@ -1,19 +1,21 @@
 //! `nauta smooth FILE -o OUT.mcap`: paper 004's post-mission smoother over
 //! a recording (DESIGN §9). The recording's logged LBL inputs ([`inputs`],
 //! through the one offline reader) run through the LBL filter again with
-//! the recording's own manifest parameters (the forward pass, which records
-//! `φ_i` and the priors and posteriors), then paper 004's backward pass
-//! (eqs. 7-9, [`track`]); OUT is the recording with the smoothed track on
-//! `smoother/lbl/nav` ([`copy`]), an `LblSolution` stream that eval, report
-//! and export treat as any other.
+//! the recording's own manifest parameters ([`filter`]; the forward pass,
+//! which records `φ_i` and the priors and posteriors), then paper 004's
+//! backward pass (eqs. 7-9, [`track`]); OUT is the recording with the
+//! smoothed track on `smoother/lbl/nav` ([`copy`]), an `LblSolution` stream
+//! that eval, report and export treat as any other.
 //!
 //! - [`inputs`]: the filter's inputs from the recording.
+//! - [`filter`]: the filter the recording's manifest runs.
 //! - [`track`]: the backward pass and the smoothed solutions.
 //! - [`copy`]: the output recording.
 //! - [`command`]: the command line (progress, notes, no partial output).
 
-
+pub mod command;
 pub mod copy;
+pub mod filter;
 pub mod inputs;
 pub mod track;
 
@@ -65,20 +67,21 @@ pub struct SmoothSummary {
     pub notes: Vec<String>,
 }
 
-/// Smooths `input` into `output` with `filter` (the recording's LBL
-/// filter, built from its manifest, not yet fed); `dvl`: whether it reads
-/// `sensor/dvl`. `on_progress(done, total)` in bytes over the two reads.
+/// Smooths `input` into `output` (written in place: the command line writes
+/// through a part file) with the LBL filter `filter_of` builds from the
+/// recording's first read (its manifest; not yet fed).
+/// `on_progress(done, total)` in bytes over the two reads.
 pub fn smooth_recording(
     input: &Path,
     output: &Path,
-    filter: Lbl,
-    dvl: bool,
+    filter_of: impl FnOnce(&nauta_log::Recording) -> anyhow::Result<Lbl>,
     mut on_progress: impl FnMut(u64, u64),
 ) -> anyhow::Result<SmoothSummary> {
     let start = Instant::now();
-    let logged = inputs::read(input, dvl, |done, total| on_progress(done, 2 * total))
+    let logged = inputs::read(input, |done, total| on_progress(done, 2 * total))
         .with_context(|| format!("cannot read the recording {}", input.display()))?;
     let read_s = start.elapsed().as_secs_f64();
+    let filter = filter_of(&logged.recording)?;
     let file_bytes = logged.recording.recovery.file_bytes;
     anyhow::ensure!(
         !logged.inputs.is_empty(),
@@ -94,7 +97,9 @@ pub fn smooth_recording(
         ));
     }
     for (topic, n) in &logged.rejected {
-        notes.push(format!("{topic}: {n} message(s) failed their checks and were skipped"));
+        notes.push(format!(
+            "{topic}: {n} message(s) failed their checks and were skipped"
+        ));
     }
 
     let start = Instant::now();

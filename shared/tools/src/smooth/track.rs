@@ -95,17 +95,21 @@ fn track_of<const N: usize>(
     })
 }
 
-/// Smooths `pass`: one solution per `lbl/nav` of the pass at a recorded
-/// step.
-pub fn smoothed_track(pass: &ForwardPass) -> Result<Track, SmoothError> {
-    let navs: Vec<LblNav> = pass
-        .outputs
+/// The `lbl/nav` solutions the filter published in `pass`.
+pub fn navs(pass: &ForwardPass) -> Vec<LblNav> {
+    pass.outputs
         .iter()
         .filter_map(|o| match o {
             LblOutput::Nav(n) => Some(*n),
             LblOutput::Ping(_) => None,
         })
-        .collect();
+        .collect()
+}
+
+/// Smooths `pass`: one solution per `lbl/nav` of the pass at a recorded
+/// step.
+pub fn smoothed_track(pass: &ForwardPass) -> Result<Track, SmoothError> {
+    let navs = navs(pass);
     match &pass.steps {
         ForwardSteps::Four(s) => track_of(s, &navs),
         ForwardSteps::Five(s) => track_of(s, &navs),
