@@ -78,6 +78,15 @@ fn a_recording_of_the_lbl_manifest_is_smoothed_and_evaluated() {
     // it published: one smoothed solution per recorded lbl/nav.
     assert_eq!(s["smoothed"].as_u64(), Some(navs), "{s}");
     assert_eq!(s["state_dim"], 4, "{s}");
+    // ... and refuses what the live filter refused (the run's only
+    // refusals: the attitude refuses none of the simulator's IMU samples).
+    let refused: u64 = s["refused"]
+        .as_object()
+        .expect("refused")
+        .values()
+        .filter_map(Value::as_u64)
+        .sum();
+    assert_eq!(Some(refused), out.summary().rejected(), "{s}\n{out}");
     for part in ["read_s", "forward_s", "backward_s", "write_s"] {
         assert!(s[part].as_f64().is_some_and(|t| t >= 0.0), "{part}: {s}");
     }
