@@ -199,6 +199,14 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Paper 004's smoother (`nauta smooth`) on a 2-hour LBL mission: the
+    /// forward and backward passes, and reading and writing the recording,
+    /// timed apart.
+    Smooth {
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Simulator speed: the scenarios generated in-process, all sensors, one core.
     Sim {
         /// Print one JSON object instead of a table.
@@ -281,6 +289,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Log { json } => bench::log::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Smooth { json } => bench::smooth::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Pacing(args) => bench::pacing::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Nav(args) => bench::nav::run_bench(&args).map(|()| ExitCode::SUCCESS),
