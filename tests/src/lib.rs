@@ -17,9 +17,11 @@ use nauta_messages::{Role, RunEvent, event_kind, fixed_str};
 use nauta_runtime::{Context, Manifest, Namespace, Subscriber, services};
 
 mod kill;
+mod kill_swap;
 pub mod smoother_fixture;
 mod summary;
 pub use kill::kill_9_after_draining;
+pub use kill_swap::{Follower, KillSwap, kill_9_then_swap, ready_pid};
 pub use summary::Summary;
 
 // ---------------------------------------------------------------------------
@@ -330,6 +332,27 @@ pub struct Finished {
 }
 
 impl Finished {
+    /// A `key=value` field of the sensor's final log line (`sensor: done
+    /// ...`) on stderr.
+    pub fn sensor_done_field(&self, key: &str) -> Option<u64> {
+        self.stderr
+            .lines()
+            .filter(|l| l.contains("sensor") && l.contains(" done "))
+            .find_map(|l| {
+                l.split_whitespace()
+                    .find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse().ok())
+            })
+    }
+
+    /// The sensor and its LBL interrogator stayed in lock step (`sim`
+    /// clock): every interrogation registered at the instant it was
+    /// stamped, and the sensor never gave up waiting for the interrogator.
+    pub fn assert_lbl_lock_step(&self) {
+        for key in ["late_interrogations", "interrogator_timeouts"] {
+            assert_eq!(self.sensor_done_field(key), Some(0), "{key}\n{self}");
+        }
+    }
+
     /// Exit code (None when ended by a signal).
     pub fn code(&self) -> Option<i32> {
         self.status.code()

@@ -5,11 +5,9 @@
 //! namespace under a watchdog.
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use nauta_messages::{NavSolution, RunEvent, event_kind, fixed_str};
-use nauta_runtime::ports::Inbox;
-use nauta_runtime::{ClockMode, Namespace, Subscriber, services};
+use nauta_runtime::{ClockMode, Namespace, services};
 use nauta_tests::*;
 
 const BOUND: Duration = Duration::from_secs(300);
@@ -137,136 +135,27 @@ fn dr_in_the_pipeline_is_deterministic_and_accurate() {
     let _ = std::fs::remove_file(&record);
 }
 
-/// Follows `ains/nav` of a run: (stamp, instance) of every solution.
-struct Follower {
-    nav: Subscriber<NavSolution>,
-    _inbox: Inbox,
-    seen: Vec<(u64, u32)>,
-}
-
-impl Follower {
-    fn poll(&mut self) {
-        let seen = &mut self.seen;
-        self.nav
-            .drain(|n| seen.push((n.header.stamp_ns, n.header.instance)))
-            .expect("ains/nav");
-    }
-
-    fn until(&mut self, wd: &Watchdog, launch: &mut Running, instance: u32, t_ns: u64) {
-        while !self.seen.iter().any(|&(s, i)| i == instance && s >= t_ns) {
-            wd.check();
-            assert!(
-                launch.is_running(),
-                "the run ended before instance {instance} published past {t_ns} ns"
-            );
-            self.poll();
-            std::thread::sleep(Duration::from_millis(5));
-        }
-    }
-}
-
-fn ains_pid(events: &mut Subscriber<RunEvent>, instance: u32) -> Option<u32> {
-    let mut pid = None;
-    events
-        .drain(|e| {
-            if e.kind == event_kind::READY
-                && fixed_str(&e.process) == "ains"
-                && e.instance == instance
-            {
-                pid = Some(e.pid);
-            }
-        })
-        .expect("run/events");
-    pid
-}
-
+/// A kill -9 of the ains (restarted warm from its snapshot) and a hot swap
+/// to `dr` keep every `ains/nav` stamp exactly once, in order, one AHRS
+/// period apart, in `wall` clock at twice real time.
 #[test]
 fn kill_9_and_swap_of_the_ains_keep_every_stamp_exactly_once() {
     bin_dir();
     let wd = Watchdog::new("ains_kill_swap", BOUND);
-    let ns = Namespace::unique();
-    let watch = EventWatch::with_clock(
-        &ns,
-        Duration::from_millis(500),
-        ClockMode::Wall { rate: 2.0 },
-    );
-    let (mut events, _events_inbox) = watch
-        .ctx
-        .subscriber(&services::run_events())
-        .expect("run/events");
-    let (nav, inbox) = watch
-        .ctx
-        .subscriber(&services::nav_solution())
-        .expect("ains/nav");
-    let mut f = Follower {
-        nav,
-        _inbox: inbox,
-        seen: Vec::new(),
-    };
-    // No other launch of this test process meanwhile: one starting after the
-    // kill would reclaim the killed ains's shared memory (every launch cleans
-    // up dead nodes) before this test has read its last solutions.
-    let _alone = Gate::close();
-    let mut launch = start_launch_manifest_with(
+    let run = kill_9_then_swap(
         &wd,
         &dr_manifest(),
-        &[
-            "--clock",
-            "wall",
-            "--rate",
-            "2",
-            "--duration",
-            "50",
-            "--namespace",
-            ns.as_str(),
-        ],
-        None,
+        2.0,
+        &["--clock", "wall", "--rate", "2", "--duration", "50"],
+        "ains",
+        &services::nav_solution(),
+        "dr",
     );
-    // Past a few snapshots (one per second of the run's clock).
-    f.until(&wd, &mut launch, 0, 15_000_000_000);
-    let mut pid = None;
-    while pid.is_none() {
-        wd.check();
-        pid = ains_pid(&mut events, 0);
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let pid = pid.expect("ains announced ready");
-    kill_9_after_draining(&wd, pid, || f.poll());
-    let killed = Instant::now();
-    f.until(&wd, &mut launch, 1, 0);
-    eprintln!(
-        "ains restart to first output: {:.0} ms after kill -9",
-        killed.elapsed().as_secs_f64() * 1e3
-    );
-    let resumed = f.seen.last().map_or(0, |s| s.0);
-    f.until(&wd, &mut launch, 1, resumed + 3_000_000_000);
-    swap_when_accepted(&wd, &ns, "ains", "dr");
-    let swapped = f.seen.last().map_or(0, |s| s.0);
-    f.until(&wd, &mut launch, 2, swapped + 3_000_000_000);
-    let out = launch.wait(&wd);
-    f.poll();
-    watch.finish();
+    let out = &run.out;
     assert_eq!(out.code(), Some(0), "the run failed\n{out}");
     let s = out.summary();
     assert_eq!((s.restarts("ains"), s.swaps("ains")), (1, 1), "{s}");
-    // Every stamp exactly once, in order, one AHRS period apart, across the
-    // restart and the swap.
-    let stamps: Vec<u64> = f.seen.iter().map(|s| s.0).collect();
-    for w in stamps.windows(2) {
-        assert_eq!(
-            w[1],
-            w[0] + NAV_PERIOD_NS,
-            "ains/nav went from {} to {} ns: a stamp lost or repeated",
-            w[0],
-            w[1]
-        );
-    }
-    for instance in 0..3 {
-        assert!(
-            f.seen.iter().any(|s| s.1 == instance),
-            "no solution from instance {instance}"
-        );
-    }
+    run.assert_every_stamp_once("ains/nav", NAV_PERIOD_NS);
     assert_eq!(s.gaps(), Some(0), "{s}");
     assert!(s.all_exited_0(), "{s}");
 }

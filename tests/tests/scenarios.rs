@@ -22,9 +22,15 @@ fn scratch(ns: &Namespace) -> PathBuf {
     d
 }
 
-/// `launch/lbl.toml` plus the scripted interrogator writing `report`.
+/// `launch/lbl.toml` with the scripted interrogator writing `report` in
+/// place of its LBL navigator.
 fn lbl_manifest(dir: &Path, report: &Path) -> PathBuf {
-    let base = std::fs::read_to_string(workspace_root().join("launch/lbl.toml")).expect("lbl.toml");
+    let text = std::fs::read_to_string(workspace_root().join("launch/lbl.toml")).expect("lbl.toml");
+    let start = text.find("[process.lbl]").expect("lbl.toml runs nauta-lbl");
+    let end = text[start + 1..]
+        .find("\n[")
+        .map_or(text.len(), |i| start + 2 + i);
+    let base = format!("{}{}", &text[..start], &text[end..]);
     let text = format!(
         "{base}\n[process.lbl]\nbin = \"nauta-lbl-script\"\nparams = {{ report = {:?}, ping_every_s = 2.0, transponders = [1, 2] }}\n",
         report.display().to_string()
@@ -32,17 +38,6 @@ fn lbl_manifest(dir: &Path, report: &Path) -> PathBuf {
     let path = dir.join("lbl-script.toml");
     std::fs::write(&path, text).expect("write manifest");
     path
-}
-
-/// A `key=value` field of the sensor's final log line (`sensor: done ...`).
-fn sensor_done_field(stderr: &str, key: &str) -> Option<u64> {
-    stderr
-        .lines()
-        .filter(|l| l.contains("sensor") && l.contains(" done "))
-        .find_map(|l| {
-            l.split_whitespace()
-                .find_map(|w| w.strip_prefix(key)?.strip_prefix('=')?.parse().ok())
-        })
 }
 
 fn run_lbl(wd: &Watchdog, seed: &str) -> (String, Summary) {
@@ -76,19 +71,10 @@ fn run_lbl(wd: &Watchdog, seed: &str) -> (String, Summary) {
     let align = alignment_samples(&manifest);
     assert_eq!(s.count("attitude/estimate"), Some(imu - (align - 1)), "{s}");
     let _ = std::fs::remove_dir_all(&dir);
-    // In lock step: every ping registered at the instant it was stamped.
-    assert_eq!(
-        sensor_done_field(&out.stderr, "late_interrogations"),
-        Some(0),
-        "{out}"
-    );
-    assert_eq!(
-        sensor_done_field(&out.stderr, "interrogator_timeouts"),
-        Some(0),
-        "{out}"
-    );
+    out.assert_lbl_lock_step();
     assert!(
-        sensor_done_field(&out.stderr, "interrogations").is_some_and(|n| n >= 55),
+        out.sensor_done_field("interrogations")
+            .is_some_and(|n| n >= 55),
         "{out}"
     );
     (text, out.summary())
