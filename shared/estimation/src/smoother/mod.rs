@@ -24,5 +24,5 @@ mod tests;
 pub use discretise::{DiscretiseError, Discretised};
 pub use error::{SmoothError, StepField};
 pub use linear::{LinearForward, LinearUpdateError};
-pub use rts::{is_restart, smooth, smooth_into};
+pub use rts::{is_restart, smooth, smooth_bridged, smooth_into};
 pub use step::{ForwardStep, SmoothedStep};

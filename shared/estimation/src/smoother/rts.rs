@@ -28,10 +28,22 @@
 //! its prior in some direction (`P_i − P⁻_i` has a positive eigenvalue), and
 //! carrying its jump back through eq. 7 would move the whole track before
 //! it (with `K_i ≈ I` between two corrections) and inflate `P_{i|N}` above
-//! `P_i`. The backward pass therefore restarts there, as at the end of the
+//! `P_i`. [`smooth`] therefore restarts there, as at the end of the
 //! mission: the step before it keeps its filtered estimate
 //! (`E_{i|N} = E_i`, `P_{i|N} = P_i`), and each stretch between restarts is
 //! smoothed on its own ([`is_restart`]).
+//!
+//! [`smooth_bridged`] instead carries the restart's information back as
+//! what it is, a fix of the states the restart set (the first `m`: the
+//! position): the smoothed estimate there, `E_{i+1|N}`'s first `m`
+//! components with `P_{i+1|N}`'s `m × m` block as their covariance (the
+//! stretch after the restart, which discarded the prior there), corrects
+//! the prior `E⁻_{i+1}, P⁻_{i+1}` as a measurement would (eqs. 5-6, Joseph
+//! form), and eqs. 7-9 go on from that corrected prior. The stretch before
+//! is then smoothed towards where the vehicle was found after it (a
+//! blackout is bridged), and `P̃_{i+1} ≤ P⁻_{i+1}` keeps `P_{i|N} ≤ P_i`.
+//! The other states' information after the restart is left out (it holds
+//! the prior's, which would count twice).
 //!
 //! The cost is a few 4×4 products and one Cholesky per step, with no
 //! allocation but the output's.
@@ -42,13 +54,28 @@ use crate::smoother::error::{SmoothError, StepField};
 use crate::smoother::step::{ForwardStep, SmoothedStep};
 
 /// Smooths a forward pass: one [`SmoothedStep`] per [`ForwardStep`], in
-/// the same order. An empty pass gives an empty result.
+/// the same order, restarting at each restart (module docs). An empty pass
+/// gives an empty result.
 pub fn smooth<const N: usize>(
     steps: &[ForwardStep<N>],
 ) -> Result<Vec<SmoothedStep<N>>, SmoothError> {
     let mut out = Vec::new();
     smooth_into(steps, &mut out)?;
     Ok(out)
+}
+
+/// [`smooth`], carrying each restart back as a fix of the first `m` states
+/// (module docs, "Restarts"; `m = 0` is [`smooth`], `m` is at most `N`).
+pub fn smooth_bridged<const N: usize>(
+    steps: &[ForwardStep<N>],
+    m: usize,
+) -> Result<Vec<SmoothedStep<N>>, SmoothError> {
+    let mut out = Vec::new();
+    let result = backward(steps, &mut out, m.min(N));
+    if result.is_err() {
+        out.clear();
+    }
+    result.map(|()| out)
 }
 
 /// [`smooth`] into `out` (cleared first), reusing its allocation. On an
@@ -58,7 +85,7 @@ pub fn smooth_into<const N: usize>(
     out: &mut Vec<SmoothedStep<N>>,
 ) -> Result<(), SmoothError> {
     out.clear();
-    let result = backward(steps, out);
+    let result = backward(steps, out, 0);
     if result.is_err() {
         out.clear();
     }
@@ -68,6 +95,7 @@ pub fn smooth_into<const N: usize>(
 fn backward<const N: usize>(
     steps: &[ForwardStep<N>],
     out: &mut Vec<SmoothedStep<N>>,
+    bridge: usize,
 ) -> Result<(), SmoothError> {
     let Some(last) = steps.last() else {
         return Ok(());
@@ -103,22 +131,31 @@ fn backward<const N: usize>(
                 field: StepField::PPrior,
             });
         };
-        if is_restart(next) {
-            out[i] = SmoothedStep {
-                stamp_ns: step.stamp_ns,
-                x: step.x_post,
-                p: step.p_post,
-            };
-            x_next = step.x_post;
-            p_next = step.p_post;
-            continue;
-        }
+        // What eqs. 7 and 9 pull the prior towards: the smoothed estimate at
+        // `i + 1`, or at a bridged restart the prior fixed by it.
+        let (x_target, p_target) = if is_restart(next) {
+            match fix_prior(next, &x_next, &p_next, bridge) {
+                Some(fixed) => fixed,
+                None => {
+                    out[i] = SmoothedStep {
+                        stamp_ns: step.stamp_ns,
+                        x: step.x_post,
+                        p: step.p_post,
+                    };
+                    x_next = step.x_post;
+                    p_next = step.p_post;
+                    continue;
+                }
+            }
+        } else {
+            (x_next, p_next)
+        };
         // Eq. 8: P⁻_{i+1} K_iᵀ = φ_i P_i.
         let gain = chol.solve(&(next.phi * step.p_post)).transpose();
         // Eq. 7.
-        let x = step.x_post + gain * (x_next - next.x_prior);
+        let x = step.x_post + gain * (x_target - next.x_prior);
         // Eq. 9.
-        let p = step.p_post + gain * (p_next - next.p_prior) * gain.transpose();
+        let p = step.p_post + gain * (p_target - next.p_prior) * gain.transpose();
         let p = (p + p.transpose()) * 0.5;
         let fail = |field| {
             Err(SmoothError::NonFinite {
@@ -150,6 +187,36 @@ fn backward<const N: usize>(
         p_next = p;
     }
     Ok(())
+}
+
+/// The prior of the restart `next` corrected by the smoothed estimate
+/// there, `x_s`, `p_s`, as a fix of its first `m` states (module docs,
+/// "Restarts"); `None` when `m` is 0 or the correction fails (the pass then
+/// restarts).
+fn fix_prior<const N: usize>(
+    next: &ForwardStep<N>,
+    x_s: &SVector<f64, N>,
+    p_s: &SMatrix<f64, N, N>,
+    m: usize,
+) -> Option<(SVector<f64, N>, SMatrix<f64, N, N>)> {
+    if m == 0 {
+        return None;
+    }
+    let prior = nalgebra::DMatrix::from_column_slice(N, N, next.p_prior.as_slice());
+    let h = nalgebra::DMatrix::<f64>::identity(m, N);
+    let r = p_s.view((0, 0), (m, m)).clone_owned();
+    let r = nalgebra::DMatrix::from_column_slice(m, m, r.as_slice());
+    // Eqs. 5-6 with z = x_s[..m], H = [I 0], R = p_s[..m, ..m].
+    let s = &h * &prior * h.transpose() + &r;
+    let gain = s.cholesky()?.solve(&(&h * &prior)).transpose();
+    let innovation = nalgebra::DVector::from_iterator(m, (0..m).map(|k| x_s[k] - next.x_prior[k]));
+    let dx = &gain * innovation;
+    let i_kh = nalgebra::DMatrix::<f64>::identity(N, N) - &gain * &h;
+    let p = &i_kh * &prior * i_kh.transpose() + &gain * &r * gain.transpose();
+    let x = next.x_prior + SVector::<f64, N>::from_iterator(dx.iter().copied());
+    let p = SMatrix::<f64, N, N>::from_iterator(p.iter().copied());
+    let p = (p + p.transpose()) * 0.5;
+    (x.iter().chain(p.iter()).all(|v| v.is_finite()) && p.cholesky().is_some()).then_some((x, p))
 }
 
 /// Relative size of a positive eigenvalue of `P_i − P⁻_i` that makes a

@@ -380,19 +380,23 @@ fn bad_dynamics_are_refused() {
     assert_eq!(zero.q, Matrix2::zeros());
 }
 
-#[test]
-fn a_reset_restarts_the_backward_pass() {
-    // Step 40 resets its state (a GPS fix at the surface): a posterior that
-    // knows less than its prior.
-    let k = 40;
-    let pass = random_pass_with(9, 60, |i, f| {
+/// [`random_pass`] of 60 steps whose step `k` resets its state (a GPS fix
+/// at the surface): a posterior that knows less than its prior.
+fn reset_pass(k: usize) -> Vec<ForwardStep<3>> {
+    random_pass_with(9, 60, |i, f| {
         if i == k {
             f.reset(
                 f.current().x_prior + SVector::<f64, 3>::new(25.0, -10.0, 0.0),
                 f.current().p_prior + SMatrix::identity() * 50.0,
             );
         }
-    });
+    })
+}
+
+#[test]
+fn a_reset_restarts_the_backward_pass() {
+    let k = 40;
+    let pass = reset_pass(k);
     assert!(is_restart(&pass[k]));
     assert!(
         !pass.iter().take(k).skip(1).any(is_restart),
@@ -406,6 +410,34 @@ fn a_reset_restarts_the_backward_pass() {
     let alone = smooth(&pass[..k]).expect("smooth the first stretch");
     assert_eq!(&out[..k], &alone[..]);
     for (f, s) in pass.iter().zip(&out) {
+        let min = (f.p_post - s.p).symmetric_eigen().eigenvalues.min();
+        assert!(min >= -1e-9 * f.p_post.amax(), "{min}");
+    }
+}
+
+#[test]
+fn a_bridged_reset_carries_the_fix_back() {
+    let k = 40;
+    let pass = reset_pass(k);
+    let cut = smooth(&pass).expect("smooth");
+    assert_eq!(smooth_bridged(&pass, 0).expect("m = 0"), cut);
+    let bridged = smooth_bridged(&pass, 2).expect("bridged");
+    // After the reset nothing changes; before it the track moves towards
+    // the smoothed position at the reset: the step before, predicted to
+    // it, lands closer.
+    assert_eq!(&bridged[k..], &cut[k..]);
+    let miss = |s: &[SmoothedStep<3>]| {
+        let d = pass[k].phi * s[k - 1].x - s[k].x;
+        d[0].hypot(d[1])
+    };
+    assert!(
+        miss(&bridged) < miss(&cut),
+        "{} {}",
+        miss(&bridged),
+        miss(&cut)
+    );
+    // And P_smoothed ≤ P_filtered still holds everywhere.
+    for (f, s) in pass.iter().zip(&bridged) {
         let min = (f.p_post - s.p).symmetric_eigen().eigenvalues.min();
         assert!(min >= -1e-9 * f.p_post.amax(), "{min}");
     }

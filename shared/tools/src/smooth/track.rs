@@ -69,7 +69,9 @@ fn track_of<const N: usize>(
     const { assert!(N >= 4, "the LBL state starts with [x, y, w_x, w_y]") };
     let steps = as_smoother(steps);
     let start = Instant::now();
-    let smoothed = smoother::smooth(&steps)?;
+    // A restart (a GPS reset, a re-acquisition) is carried back as a fix of
+    // the position, x and y.
+    let smoothed = smoother::smooth_bridged(&steps, 2)?;
     let backward_s = start.elapsed().as_secs_f64();
     // Both in stamp order: walk them together.
     let mut solutions = Vec::with_capacity(navs.len());
