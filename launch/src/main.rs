@@ -183,6 +183,10 @@ enum BenchCommand {
     /// manoeuvres over seeds (predicted against realised error), DVL spikes
     /// with and without the filter, the survey, speed.
     Nav(bench::nav::NavArgs),
+    /// LBL navigation (paper 003's EKF) in process on the simulator over
+    /// seeds, 2 and 4 transponders: accuracy, consistency, multipath, the
+    /// current, a ten-minute blackout, figure of merit against round robin.
+    Lbl(bench::lbl::LblArgs),
     /// Wall-clock pacing: the survey in `wall` clock at each `--rate` (1 and
     /// 10 by default); the sensor's wall span against the expected.
     Pacing(bench::pacing::PacingArgs),
@@ -293,6 +297,7 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Pacing(args) => bench::pacing::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Nav(args) => bench::nav::run_bench(&args).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Lbl(args) => bench::lbl::run_bench(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Attitude { broad, sim, json } => match (broad, sim) {
                 (Some(dir), _) => bench::attitude::run_broad(&dir, json),
                 (None, _) => bench::attitude::run_sim(json),

@@ -16,7 +16,7 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use clap::Parser;
-use nauta_estimation::lbl::{Lbl, LblInput, LblOutput, LblParams, LblSite, VARIANTS};
+use nauta_estimation::lbl::{Lbl, LblInput, LblOutput, LblParams, VARIANTS};
 use nauta_messages::{LblInterrogation, LblSnapshot, LblSolution, Role};
 use nauta_runtime::process::ProcessArgs;
 use nauta_runtime::{Manifest, Shell, services};
@@ -62,19 +62,9 @@ fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result
         .site
         .as_ref()
         .with_context(|| format!("{file}: the manifest has no [site]: LBL needs the origin, the transponders and the sound speed"))?;
-    let layout = site.layout().with_context(|| {
-        format!("{file}: [site] has no transponders (site.transponders, or a process's lbl_layout)")
-    })?;
-    let sound_speed_m_s = site.sound_speed_m_s.with_context(|| {
-        format!("{file}: [site] has no sound_speed_m_s (the sound speed the vehicle assumes, m/s)")
-    })?;
     site.log_declination();
-    let lbl_site = LblSite {
-        origin_lat_rad: site.latitude_deg.to_radians(),
-        origin_lon_rad: site.longitude_deg.to_radians(),
-        declination_rad: site.magnetic_declination_deg.to_radians(),
-        sound_speed_m_s,
-        layout,
-    };
+    let lbl_site = site
+        .lbl_site()
+        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
     Lbl::new(&params, lbl_site).with_context(|| format!("{file}: process.{process}"))
 }

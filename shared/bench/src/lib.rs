@@ -4,6 +4,7 @@
 pub mod attitude;
 pub mod chaos;
 pub mod ipc;
+pub mod lbl;
 pub mod log;
 pub mod nav;
 pub mod pacing;

@@ -122,7 +122,7 @@ fn input_of(m: &SensorMessage) -> Option<(u8, AinsInput)> {
     })
 }
 
-fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
+pub(crate) fn take<M: Message>(data: &mut Data, topic: &str, m: &M) -> anyhow::Result<()> {
     data.take(topic, M::TYPE_NAME, &codec::encode(m)?);
     Ok(())
 }
@@ -323,7 +323,7 @@ fn run_dr(
 /// `f` of every job, in the jobs' order, on as many threads as the machine
 /// has cores: each job is its own seeded run, so the figures do not depend
 /// on the thread count (only the wall time does).
-fn par_map<J: Sync, R: Send>(
+pub(crate) fn par_map<J: Sync, R: Send>(
     jobs: &[J],
     f: impl Fn(&J) -> anyhow::Result<R> + Sync,
 ) -> anyhow::Result<Vec<R>> {

@@ -9,7 +9,7 @@
 //! `--set sensor.params.lbl_layout=Four` changes them for every process of
 //! the run at once. Both at once is refused: one list, one source.
 
-use nauta_estimation::lbl::{Layout, Transponder};
+use nauta_estimation::lbl::{Layout, LblSite, Transponder};
 use serde::Deserialize;
 
 /// `[site]` as written.
@@ -101,6 +101,30 @@ impl Site {
     /// The transponders as a checked layout; `None` when there are none.
     pub fn layout(&self) -> Option<Layout> {
         Layout::new(self.transponders.clone()).ok()
+    }
+
+    /// What the LBL role knows of its site (`nauta-lbl`, and whatever runs
+    /// its estimator offline): the origin, the declination, the sound
+    /// speed the vehicle assumes and the transponders; the error says
+    /// which of the last two the site lacks.
+    pub fn lbl_site(&self) -> anyhow::Result<LblSite> {
+        let layout = self.layout().ok_or_else(|| {
+            anyhow::anyhow!(
+                "[site] has no transponders (site.transponders, or a process's lbl_layout)"
+            )
+        })?;
+        let sound_speed_m_s = self.sound_speed_m_s.ok_or_else(|| {
+            anyhow::anyhow!(
+                "[site] has no sound_speed_m_s (the sound speed the vehicle assumes, m/s)"
+            )
+        })?;
+        Ok(LblSite {
+            origin_lat_rad: self.latitude_deg.to_radians(),
+            origin_lon_rad: self.longitude_deg.to_radians(),
+            declination_rad: self.magnetic_declination_deg.to_radians(),
+            sound_speed_m_s,
+            layout,
+        })
     }
 
     /// Checks the acoustics (the sound speed's range, the transponders as a
