@@ -1,10 +1,10 @@
 //! The LBL role's core from a manifest: the process's variant parameters
-//! and `[site]`'s origin, declination, sound speed and transponders. The
-//! one place that builds it, for `nauta-lbl` and for `nauta smooth` (which
-//! runs a recording's filter again from its recorded manifest).
+//! and `[site]`'s origin, declination, sound speed and transponders
+//! ([`super::Site::lbl_site`]), for `nauta smooth` (which runs a
+//! recording's filter again from its recorded manifest) and the benches.
 
 use anyhow::Context as _;
-use nauta_estimation::lbl::{Lbl, LblParams, LblSite};
+use nauta_estimation::lbl::{Lbl, LblParams};
 
 use super::Manifest;
 
@@ -17,23 +17,9 @@ impl Manifest {
         let site = self.site.as_ref().with_context(|| {
             format!("{file}: the manifest has no [site]: LBL needs the origin, the transponders and the sound speed")
         })?;
-        let layout = site.layout().with_context(|| {
-            format!(
-                "{file}: [site] has no transponders (site.transponders, or a process's lbl_layout)"
-            )
-        })?;
-        let sound_speed_m_s = site.sound_speed_m_s.with_context(|| {
-            format!(
-                "{file}: [site] has no sound_speed_m_s (the sound speed the vehicle assumes, m/s)"
-            )
-        })?;
-        let lbl_site = LblSite {
-            origin_lat_rad: site.latitude_deg.to_radians(),
-            origin_lon_rad: site.longitude_deg.to_radians(),
-            declination_rad: site.magnetic_declination_deg.to_radians(),
-            sound_speed_m_s,
-            layout,
-        };
+        let lbl_site = site
+            .lbl_site()
+            .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
         Lbl::new(&params, lbl_site).with_context(|| format!("{file}: process.{process}"))
     }
 }
