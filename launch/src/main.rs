@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 
 use nauta_bench as bench;
 use nauta_launcher::{launch, logcmd, pipeline};
-use nauta_tools::{calibrate, eval, export, import, report};
+use nauta_tools::{calibrate, eval, export, import, lbl_plan, report, smooth};
 
 /// nauta: navigation stack of an autonomous underwater vehicle.
 #[derive(Debug, Parser)]
@@ -97,6 +97,17 @@ enum Command {
         #[command(subcommand)]
         which: ImportCommand,
     },
+    /// Paper 004's post-mission smoother: the recording's LBL inputs through
+    /// its LBL filter again, then the fixed-interval Rauch-Tung-Striebel
+    /// backward pass; OUT is the recording plus the smoothed track
+    /// `smoother/lbl/nav` (`nauta smooth run.mcap -o smoothed.mcap`).
+    Smooth(smooth::command::SmoothArgs),
+    /// LBL navigation: `nauta lbl plan LAYOUT -o MAP.png` maps paper 003's
+    /// sensitivities and operating box of a transponder layout.
+    Lbl {
+        #[command(subcommand)]
+        which: LblCommand,
+    },
     /// Benchmarks (use a release build).
     Bench {
         #[command(subcommand)]
@@ -133,6 +144,15 @@ enum ImportCommand {
     /// `propeller.csv`, `truth.csv`; each optional; columns in the README),
     /// with a manifest that runs the estimators the channels allow.
     Csv(import::csv::ImportCsvArgs),
+}
+
+#[derive(Debug, Subcommand)]
+enum LblCommand {
+    /// Paper 003 §III for a transponder layout: the sensitivity of the
+    /// position to range errors (Fig. 2) and to the baseline's length
+    /// (Fig. 3) as level contours in MAP.png, and the desirable operating
+    /// box (Fig. 4), drawn and printed.
+    Plan(lbl_plan::command::PlanArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -179,6 +199,14 @@ enum BenchCommand {
         /// Paper 000's still, pitch-and-roll and yaw conditions on the simulator.
         #[arg(long)]
         sim: bool,
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Paper 004's smoother (`nauta smooth`) on a 2-hour LBL mission: the
+    /// forward and backward passes, and reading and writing the recording,
+    /// timed apart.
+    Smooth {
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
@@ -257,10 +285,15 @@ fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             ImportCommand::Akit(args) => import::akit::akit(&args),
             ImportCommand::Csv(args) => import::csv::csv(&args),
         },
+        Command::Smooth(args) => smooth::command::run(&args),
+        Command::Lbl { which } => match which {
+            LblCommand::Plan(args) => lbl_plan::command::run(&args),
+        },
         Command::Bench { which } => match which {
             BenchCommand::Log { json } => bench::log::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Ipc { json } => bench::ipc::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Sim { json } => bench::sim::run(json).map(|()| ExitCode::SUCCESS),
+            BenchCommand::Smooth { json } => bench::smooth::run(json).map(|()| ExitCode::SUCCESS),
             BenchCommand::Chaos(args) => bench::chaos::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Pacing(args) => bench::pacing::run(&args).map(|()| ExitCode::SUCCESS),
             BenchCommand::Nav(args) => bench::nav::run_bench(&args).map(|()| ExitCode::SUCCESS),

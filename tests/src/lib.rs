@@ -18,6 +18,7 @@ use nauta_runtime::{Context, Manifest, Namespace, Subscriber, services};
 
 mod kill;
 mod kill_swap;
+pub mod smoother_fixture;
 mod summary;
 pub use kill::kill_9_after_draining;
 pub use kill_swap::{Follower, KillSwap, kill_9_then_swap, ready_pid};

@@ -9,6 +9,7 @@ pub mod log;
 pub mod nav;
 pub mod pacing;
 pub mod sim;
+pub mod smooth;
 
 use anyhow::Context as _;
 

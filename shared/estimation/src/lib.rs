@@ -41,6 +41,8 @@
 //!   and the surfacing advisory.
 //! - [`readings`]: the checked domain values sensors and estimators report
 //!   (built from wire messages by `nauta_messages::checked`).
+//! - [`smoother`]: paper 004's fixed-interval RTS smoother (eqs. 7-9) over
+//!   the steps of a forward Kalman pass ([`smoother::ForwardStep`]).
 //! - [`strapdown`]: free strapdown inertial navigation on the WGS84 ellipsoid.
 //!
 //! Equations name the paper (`../shared/papers/`, by number) or the textbook
@@ -67,6 +69,7 @@ pub mod positioning;
 pub mod predictor;
 pub mod readings;
 pub mod role;
+pub mod smoother;
 pub mod strapdown;
 
 pub use alignment::Alignment;

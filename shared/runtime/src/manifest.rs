@@ -17,6 +17,7 @@ pub use crate::manifest_limits::{
 };
 use crate::manifest_limits::{check_process_name, launcher_flag, read_manifest};
 
+mod lbl;
 mod site;
 use site::RawSite;
 pub use site::{DeclinationSource, SOUND_SPEED_RANGE_M_S, Site, TranspondersSource};

@@ -120,7 +120,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         .transpose()?;
     options.presets = Some(crate::presets::simulated);
 
-    remove_part_file_on_signal(&args.output)?;
+    crate::part_file::remove_part_file_on_signal(&args.output)?;
     let total = std::fs::metadata(&args.file).map(|m| m.len()).unwrap_or(0);
     let bar = crate::progress::progress_bar(total, "exporting");
     let result = export::export(&args.file, &args.output, &options, |done, _| {
@@ -146,48 +146,6 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         _ => {}
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// The export's hidden part file, for the signal handler (set once, before
-/// the handler is installed).
-static PART_FILE: std::sync::OnceLock<std::ffi::CString> = std::sync::OnceLock::new();
-
-extern "C" fn remove_part_and_exit(signal: libc::c_int) {
-    // Only async-signal-safe calls: unlink and _exit.
-    if let Some(path) = PART_FILE.get() {
-        // SAFETY: `path` is a NUL-terminated string that lives for the program.
-        unsafe { libc::unlink(path.as_ptr()) };
-    }
-    // SAFETY: _exit ends the process at once; 128 + signal as a shell reports it.
-    unsafe { libc::_exit(128 + signal) };
-}
-
-/// SIGINT (Ctrl-C), SIGTERM or SIGHUP during the export remove the part file
-/// it is writing and end the process (exit 128 + signal): an interrupted
-/// export leaves nothing behind.
-fn remove_part_file_on_signal(output: &std::path::Path) -> anyhow::Result<()> {
-    use std::os::unix::ffi::OsStrExt as _;
-    let part = export::part_path(output)
-        .with_context(|| format!("the output path {} names no file", output.display()))?;
-    let c = std::ffi::CString::new(part.as_os_str().as_bytes())
-        .with_context(|| format!("the output path {} holds a NUL byte", output.display()))?;
-    let _ = PART_FILE.set(c);
-    for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
-        // SAFETY: the handler only calls async-signal-safe functions and
-        // reads a OnceLock that was set before it was installed.
-        let previous = unsafe {
-            libc::signal(
-                signal,
-                remove_part_and_exit as extern "C" fn(libc::c_int) as libc::sighandler_t,
-            )
-        };
-        anyhow::ensure!(
-            previous != libc::SIG_ERR,
-            "cannot handle signal {signal}: {}",
-            std::io::Error::last_os_error()
-        );
-    }
-    Ok(())
 }
 
 /// The summary for people: one line, then one per track.

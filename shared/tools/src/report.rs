@@ -2,7 +2,7 @@
 //! that shows them with the eval table (DESIGN §9). The figures come from
 //! [`crate::eval::evaluate`], the computation `nauta eval` prints.
 
-mod font;
+pub(crate) mod font;
 mod plots;
 
 use std::fmt::Write as _;

@@ -102,6 +102,8 @@ struct Panel {
     title: String,
     y_desc: String,
     series: Vec<Series>,
+    /// Its own time span (a detail), else the span shared by the panels.
+    x: Option<(f64, f64)>,
 }
 
 impl Panel {
@@ -110,6 +112,7 @@ impl Panel {
             title: title.into(),
             y_desc: y_desc.into(),
             series: Vec::new(),
+            x: None,
         }
     }
 
@@ -140,6 +143,7 @@ fn draw_panels(path: &Path, panels: &[Panel]) -> anyhow::Result<()> {
     let x = range(
         panels
             .iter()
+            .filter(|p| p.x.is_none())
             .flat_map(|p| p.series.iter().flat_map(|s| s.points.iter().map(|p| p.0))),
     )
     .unwrap_or((0.0, 1.0));
@@ -148,8 +152,14 @@ fn draw_panels(path: &Path, panels: &[Panel]) -> anyhow::Result<()> {
         .iter()
         .zip(&panels)
     {
-        let y = range(p.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)))
-            .unwrap_or((-1.0, 1.0));
+        let x = p.x.unwrap_or(x);
+        let inside = |q: &&(f64, f64)| q.0 >= x.0 && q.0 <= x.1;
+        let y = range(
+            p.series
+                .iter()
+                .flat_map(|s| s.points.iter().filter(inside).map(|q| q.1)),
+        )
+        .unwrap_or((-1.0, 1.0));
         draw_panel(area, p, x, y)?;
     }
     root.present().map_err(err)
@@ -179,7 +189,11 @@ fn draw_panel(
         .map_err(err)?;
     for s in &p.series {
         let c = s.color;
-        let pts = s.points.iter().copied();
+        let pts = s
+            .points
+            .iter()
+            .copied()
+            .filter(|q| q.0 >= x.0 && q.0 <= x.1);
         let anno = match s.style {
             Style::Line => chart.draw_series(LineSeries::new(pts, c.stroke_width(1))),
             Style::Dots => chart.draw_series(pts.map(|q| Circle::new(q, 2, c.filled()))),
@@ -624,21 +638,79 @@ fn ellipse_axes(data: &Data, dir: &Path) -> anyhow::Result<Option<Plot>> {
         return Ok(None);
     }
     let compared = majors.series.len() >= 2;
+    let detail = compared.then(|| detail_window(&majors)).flatten();
     if compared {
-        panels.push(majors);
+        if let Some((t0, t1)) = detail {
+            // Paper 004 Fig. 8 shows "a short period of the mission": the
+            // saw teeth of the real-time filter against the smoothed curve.
+            let mut d = majors.clone();
+            d.title = format!(
+                "Semi-major axes, detail from {t0:.0} s to {t1:.0} s (as paper 004 Fig. 8)"
+            );
+            d.series = majors
+                .series
+                .iter()
+                .map(|s| Series {
+                    points: full_rate(data, &s.label, t0, t1).unwrap_or_else(|| s.points.clone()),
+                    ..s.clone()
+                })
+                .collect();
+            d.x = Some((t0, t1));
+            panels.push(majors);
+            panels.push(d);
+        } else {
+            panels.push(majors);
+        }
     }
     draw_panels(&dir.join("ellipse_axes.png"), &panels)?;
     let mut caption = String::from(
         "Lengths of the semi-axes of the 1σ position uncertainty ellipse (square roots of the eigenvalues of the published north/east covariance; for lbl/nav the x-y block P_xy of P), against time, as papers 003 Fig. 6 and 004 Figs. 6-7.",
     );
     if compared {
-        caption += " Last panel: the semi-major axes of every stream together (paper 004 Fig. 8: real time against smoothed).";
+        caption += " Then the semi-major axes of every stream together (paper 004 Fig. 8: real time against smoothed)";
+        caption += if detail.is_some() {
+            ", and a detail of two minutes in the middle of the mission at full rate."
+        } else {
+            "."
+        };
     }
     Ok(Some(Plot {
         file: "ellipse_axes.png",
         title: "Uncertainty ellipse axes".into(),
         caption,
     }))
+}
+
+/// Two minutes in the middle of the span of `p`'s series (the whole span
+/// when shorter), when a smoothed track (`smoother/...`) is among them.
+fn detail_window(p: &Panel) -> Option<(f64, f64)> {
+    const DETAIL_S: f64 = 120.0;
+    if !p.series.iter().any(|s| s.label.starts_with("smoother/")) {
+        return None;
+    }
+    let (t0, t1) = range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.0)))?;
+    let mid = 0.5 * (t0 + t1);
+    Some((
+        (mid - 0.5 * DETAIL_S).max(t0),
+        (mid + 0.5 * DETAIL_S).min(t1),
+    ))
+}
+
+/// The semi-major axes of stream `topic` between `t0` and `t1` s, every
+/// sample (the panels of the whole mission are decimated).
+fn full_rate(data: &Data, topic: &str, t0: f64, t1: f64) -> Option<Vec<(f64, f64)>> {
+    let s = data.streams.values().find(|s| s.topic == topic)?;
+    Some(
+        s.samples
+            .iter()
+            .filter_map(|x| {
+                let t = data.t_s(x.stamp_ns);
+                (t >= t0 && t <= t1)
+                    .then(|| x.cov_ne_m2.map(|c| (t, compute::ellipse_axes(&c).0)))
+                    .flatten()
+            })
+            .collect(),
+    )
 }
 
 // ---------------------------------------------------------------------------
@@ -659,7 +731,13 @@ fn range_residuals(
 ) -> anyhow::Result<Option<Plot>> {
     let mut panels = Vec::new();
     let mut caption = Vec::new();
-    for s in data.streams.values() {
+    // A smoothed track carries the filter's last innovation unchanged (the
+    // smoother computes none): its panel would repeat the filter's.
+    for s in data
+        .streams
+        .values()
+        .filter(|s| !s.topic.starts_with("smoother/"))
+    {
         let mut last = None;
         let mut by_id: std::collections::BTreeMap<u32, Vec<(f64, f64)>> = Default::default();
         let mut rejected = Vec::new();
