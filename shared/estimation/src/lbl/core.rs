@@ -20,11 +20,15 @@
 //!   steps' instants; the move back to the round trip's middle makes the
 //!   ≤ 100 ms wait exact).
 //! - **Re-acquisition.** After `reacquire_after` ranges refused in a row
-//!   with none accepted for `reacquire_s`, the next range is accepted with
-//!   the position's covariance widened by its innovation squared: after a
-//!   blackout the growth of `P` (eq. 4) usually lets the first range in
-//!   anyway; this rule makes sure no estimate, however wrong its `P`, is
-//!   locked out.
+//!   with none accepted for `reacquire_s`, or after `reacquire_agreeing`
+//!   ranges of one transponder refused in a row whose innovations agree
+//!   (the estimate is off, not the ranges: a multipath reply is late by a
+//!   random amount), the range is accepted with the position's covariance
+//!   widened by its innovation squared and the current's back to its
+//!   starting σ: after a blackout the growth of `P` (eq. 4) usually lets
+//!   the first range in anyway; these rules make sure no estimate, however
+//!   wrong its `P` (a multipath reply taken while the start's `P` was still
+//!   wide, then a current learnt from the conflict), is locked out.
 //! - **GPS** at the surface (depth below `surface_depth_m`): the first fix
 //!   after a dive resets the position; the next ones are weighed, and one
 //!   beyond `gps_gate` resets again.
@@ -152,6 +156,7 @@ impl Lbl {
                 submerged: false,
                 last: LastRange::default(),
                 refused_in_row: 0,
+                refusals: Vec::new(),
                 last_accept_ns: None,
                 stats: LblStats::default(),
             },
@@ -433,6 +438,15 @@ impl Lbl {
         if r.reacquire {
             kf.p[(0, 0)] += nu * nu;
             kf.p[(1, 1)] += nu * nu;
+            // Ranges refused long enough to re-acquire mean the dead
+            // reckoning went wrong, and the current is what moves the
+            // estimate away between ranges: it is as unknown as at the
+            // start again (kept, a wrong current drifted the estimate off
+            // after each re-acquisition).
+            let vw = self.params.initial_current_sigma_m_s.powi(2);
+            for i in [2, 3] {
+                kf.p[(i, i)] = kf.p[(i, i)].max(vw);
+            }
         }
         // Paper 003 §V-C: E⁺ = E⁻ + K (r − r*), P⁺ (Joseph form).
         if kf.update(&h, nu, self.params.range_sigma_m.powi(2)) {
@@ -707,7 +721,15 @@ impl Lbl {
             .st
             .last_accept_ns
             .is_some_and(|l| r.stamp_ns.saturating_sub(l) as f64 * 1e-9 >= self.params.reacquire_s);
-        let reacquire = !accepted && self.st.refused_in_row >= self.params.reacquire_after && stale;
+        let agreeing = if accepted {
+            0
+        } else {
+            self.st
+                .note_refusal(id, nu, 4.0 * self.params.range_sigma_m)
+        };
+        let reacquire = !accepted
+            && ((self.st.refused_in_row >= self.params.reacquire_after && stale)
+                || agreeing >= self.params.reacquire_agreeing);
         let after_gap = stale;
         self.st.last = LastRange {
             innovation_m: nu,
@@ -730,12 +752,14 @@ impl Lbl {
             tracing::info!(
                 transponder = id,
                 innovation_m = nu,
+                agreeing,
                 "re-acquiring: no range accepted for {:.0} s",
                 self.st
                     .last_accept_ns
                     .map_or(0.0, |l| r.stamp_ns.saturating_sub(l) as f64 * 1e-9)
             );
         }
+        self.st.clear_refusals(id);
         self.st.refused_in_row = 0;
         self.st.last_accept_ns = Some(r.stamp_ns);
         if self.st.pending.len() < MAX_PENDING {

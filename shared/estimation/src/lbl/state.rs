@@ -10,6 +10,8 @@ use crate::lbl::history::History;
 pub const MAX_RECENT_PINGS: usize = 32;
 /// Replies and GPS fixes waiting for the next step, at most.
 pub const MAX_PENDING: usize = 16;
+/// Transponders whose refused ranges are remembered (the most recent).
+pub const MAX_REFUSALS: usize = 4;
 
 /// What the role counted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -162,6 +164,9 @@ pub struct LblState {
     pub last: LastRange,
     /// Ranges refused in a row.
     pub refused_in_row: u32,
+    /// Per transponder (the last [`MAX_REFUSALS`] refused), its ranges
+    /// refused in a row whose innovations agree.
+    pub refusals: Vec<Refusals>,
     /// The last range accepted (or the start), ns.
     pub last_accept_ns: Option<u64>,
     /// The counters.
@@ -189,9 +194,53 @@ impl LblState {
             && self.pending_gps.is_none_or(|g| {
                 g.position_m.iter().all(|v| v.is_finite()) && g.var_m2 > 0.0 && g.var_m2.is_finite()
             });
-        let pings = self.pings.recent.len() <= MAX_RECENT_PINGS;
+        let pings = self.pings.recent.len() <= MAX_RECENT_PINGS
+            && self.refusals.len() <= MAX_REFUSALS
+            && self.refusals.iter().all(|r| r.innovation_m.is_finite());
         let last = self.last.innovation_m.is_finite() && self.start_side.is_none_or(f64::is_finite);
         sized && finite && held && self.history.is_valid() && pending && pings && last
+    }
+}
+
+/// One transponder's ranges refused in a row, their innovations agreeing.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Refusals {
+    /// The transponder.
+    pub transponder_id: u32,
+    /// The last one's innovation `r − r*`, m.
+    pub innovation_m: f64,
+    /// How many.
+    pub count: u32,
+}
+
+impl LblState {
+    /// Notes a range of `id` refused with innovation `nu`: one more in its
+    /// run when `nu` is within `tolerance_m` of the run's last, else a new
+    /// run; the run's length.
+    pub fn note_refusal(&mut self, id: u32, nu: f64, tolerance_m: f64) -> u32 {
+        if let Some(r) = self.refusals.iter_mut().find(|r| r.transponder_id == id) {
+            r.count = if (nu - r.innovation_m).abs() <= tolerance_m {
+                r.count + 1
+            } else {
+                1
+            };
+            r.innovation_m = nu;
+            return r.count;
+        }
+        if self.refusals.len() >= MAX_REFUSALS {
+            self.refusals.remove(0);
+        }
+        self.refusals.push(Refusals {
+            transponder_id: id,
+            innovation_m: nu,
+            count: 1,
+        });
+        1
+    }
+
+    /// A range of `id` was accepted: its run of refusals ends.
+    pub fn clear_refusals(&mut self, id: u32) {
+        self.refusals.retain(|r| r.transponder_id != id);
     }
 }
 

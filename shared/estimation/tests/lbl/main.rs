@@ -521,3 +521,27 @@ fn bad_inputs_are_refused_by_kind() {
         .expect_err("no position");
     assert_eq!(e.kind, "no_position");
 }
+
+/// A start 5 m off with a `P` that claims 0.2 m (a multipath reply taken
+/// while the start's `P` was wide does the same): the ranges that keep
+/// disagreeing by the same amount re-acquire within a few of them, the
+/// current's σ widened again, long before `reacquire_s` (20 s) would.
+#[test]
+fn agreeing_refusals_reacquire_a_wrong_start() {
+    let p = LblParams {
+        initial_position_m: Some([5.0, 0.0]),
+        initial_sigma_m: 0.2,
+        ..params()
+    };
+    let mut est = estimator(LblLayout::Two, &p);
+    let mut g = scenario(LblLayout::Two, 7, 120.0, |_, s| s.gps.enabled = false);
+    let r = run(&mut est, &mut g);
+    assert!(r.stats.reacquisitions >= 1, "{:?}", r.stats);
+    let late = r
+        .navs
+        .iter()
+        .filter(|s| s.t_s() >= 10.0)
+        .map(Scored::horizontal_m);
+    let worst = late.fold(0.0, f64::max);
+    assert!(worst < 1.5, "{worst} m after 10 s: {}", r.summary());
+}
