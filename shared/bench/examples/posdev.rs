@@ -19,8 +19,8 @@
 //! `SEEDS` a list (development: 7,8,9), `CASES` a list of modem cases (see
 //! `tweak`: `nominal`, the robustness cases `loss`, `sound`, `buoy5`,
 //! `multipath`, `all`, and for the budget `clean` (no modem error),
-//! `jitteronly`, `soundonly`, `buoyonly`, `nojitter`, `nosound`,
-//! `nobuoygps`), each `VARIANT` `pf` or `ekf` with its parameters as JSON.
+//! `jitteronly`, `soundonly`, `buoyonly`, `nojitter`, `halfjitter` (0.5
+//! ms), `nosound`, `nobuoygps`), each `VARIANT` `pf` or `ekf` with its parameters as JSON.
 //! Per seed and the mean: the buoy fixes' N/E RMS and truth inside their
 //! 95 % region, the approximated `ains/nav` N/E and horizontal RMS, the
 //! first and last third of the dive. `TRACE=1` prints every fix, `VEL=1`
@@ -89,6 +89,7 @@ fn tweak(case: &str, s: &mut SuiteConfig) -> anyhow::Result<()> {
         }
         "nobuoygps" => s.modem.buoy_gps_sigma_m = 0.0,
         "nojitter" => s.modem.noise.clock_jitter_sigma = 0.0,
+        "halfjitter" => s.modem.noise.clock_jitter_sigma = 0.5e-3,
         "nosound" => s.modem.noise.sound_speed_error = 0.0,
         _ => return Err(anyhow::anyhow!("unknown case {case}")),
     }
