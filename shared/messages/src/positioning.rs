@@ -8,7 +8,7 @@ use crate::domain::{decode, pack, unpack};
 use crate::{Header, PositionFix, PositioningSnapshot, Role, codec, fixed_str, to_fixed_str};
 
 /// Bytes a [`PositioningSnapshot`] holds of the state.
-pub const POSITIONING_STATE_BYTES: usize = 2 * 32 * 8;
+pub const POSITIONING_STATE_BYTES: usize = 6 * 32 * 8;
 
 impl From<&Fix> for PositionFix {
     fn from(f: &Fix) -> Self {
@@ -47,7 +47,7 @@ impl PositioningSnapshot {
             variant: to_fixed_str(variant),
             state_len: bytes.len() as u32,
             pad: 0,
-            state: [[0; 32]; 2],
+            state: [[0; 32]; 6],
         };
         pack(&bytes, &mut m.state);
         m

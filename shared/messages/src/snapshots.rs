@@ -60,12 +60,14 @@ message! {
     /// Positioning state for a warm restart or a hot swap: the estimator's
     /// state, bincode-encoded (the codec's configuration) from
     /// `nauta_estimation::positioning::PositioningState` (the dead-reckoned
-    /// centre, the filter's mean and 4×4 covariance of offset and velocity
-    /// correction, the depth tare, the timers and counters). Both variants
-    /// share the state: the `ekf` continues bit for bit, the `pf` redraws
-    /// its particles from the Gaussian. v1 (a 2×2 Gaussian only) was never
+    /// centre, the filter's mean and 11×11 covariance of offset, velocity
+    /// correction, sound-speed, scale and heading errors and the buoy's
+    /// track, the buoy's reference, the depth tare, the timers and
+    /// counters). Both variants share the state: the `ekf` continues bit
+    /// for bit, the `pf` redraws its particles from the Gaussian. v2 held a
+    /// 4×4 Gaussian in 512 bytes; v1 (a 2×2 Gaussian only) was never
     /// published: no positioning process existed.
-    #[wire(type_name = "nauta.PositioningSnapshot.v2", size = 568)]
+    #[wire(type_name = "nauta.PositioningSnapshot.v3", size = 1592)]
     pub struct PositioningSnapshot {
         /// Common header; `stamp_ns` is the stamp of the last input processed.
         pub header: Header,
@@ -77,7 +79,7 @@ message! {
         pub pad: u32,
         /// The state: the first `state_len` bytes of these words, each
         /// little-endian.
-        pub state: [[u64; 32]; 2],
+        pub state: [[u64; 32]; 6],
     }
 }
 

@@ -125,6 +125,34 @@ impl Cycle {
     }
 }
 
+/// The positioning's sensor inputs among a step's messages `wire`: those
+/// stamped before the step's `stamp_ns` (a buoy message, stamped at its
+/// reception between two steps), and the others (depth, GPS).
+pub fn positioning_inputs(
+    wire: &[SensorMessage],
+    stamp_ns: u64,
+) -> (Vec<PositioningInput>, Vec<PositioningInput>) {
+    let (mut early, mut late) = (Vec::new(), Vec::new());
+    for m in wire {
+        let input = match m {
+            SensorMessage::Depth(w) => Depth::try_from(w).ok().map(PositioningInput::Depth),
+            SensorMessage::Gps(w) => Gps::try_from(w).ok().map(PositioningInput::Gps),
+            SensorMessage::Modem(w) => BuoyRangeReading::try_from(w)
+                .ok()
+                .map(PositioningInput::Modem),
+            _ => None,
+        };
+        if let Some(i) = input {
+            if i.stamp_ns() < stamp_ns {
+                early.push(i);
+            } else {
+                late.push(i);
+            }
+        }
+    }
+    (early, late)
+}
+
 /// Runs the complete system over `scenario` with `sensors` and `seed`;
 /// without `positioning`, the aided INS alone (no fixes).
 pub fn run_complete(
@@ -155,26 +183,11 @@ pub fn run_complete(
         // The positioning's sensor inputs: a buoy message is stamped at its
         // reception, between the simulator's steps, so it comes before this
         // step's solution; the depth and GPS come with it, after it.
-        let (mut early, mut late) = (Vec::new(), Vec::new());
-        if positioning.is_some() {
-            for m in &wire {
-                let input = match m {
-                    SensorMessage::Depth(w) => Depth::try_from(w).ok().map(PositioningInput::Depth),
-                    SensorMessage::Gps(w) => Gps::try_from(w).ok().map(PositioningInput::Gps),
-                    SensorMessage::Modem(w) => BuoyRangeReading::try_from(w)
-                        .ok()
-                        .map(PositioningInput::Modem),
-                    _ => None,
-                };
-                if let Some(i) = input {
-                    if i.stamp_ns() < step.stamp_ns {
-                        early.push(i);
-                    } else {
-                        late.push(i);
-                    }
-                }
-            }
-        }
+        let (early, mut late) = if positioning.is_some() {
+            positioning_inputs(&wire, step.stamp_ns)
+        } else {
+            (Vec::new(), Vec::new())
+        };
         if let Some(pos) = positioning.as_deref_mut() {
             cycle.feed(pos, ains, &early, &step, &mut data)?;
         }

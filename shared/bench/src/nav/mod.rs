@@ -81,11 +81,47 @@ pub struct NavArgs {
     /// robustness cases and the positioning's speed.
     #[arg(long)]
     pub complete: bool,
+    /// The complete system's seeds instead of 100-109: a range `A-B`
+    /// (inclusive) or a list `A,B,C` (tuning uses the development seeds
+    /// 7-9; the benchmark's are 100-199).
+    #[arg(long, value_name = "SEEDS", value_parser = parse_seeds)]
+    pub seeds: Option<Seeds>,
+}
+
+/// The seeds `--seeds` names (a newtype: clap would take a `Vec` for
+/// several occurrences of the option).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Seeds(pub Vec<u64>);
+
+/// `A-B` (inclusive) or `A,B,...`: at least one seed, at most 1000.
+fn parse_seeds(s: &str) -> Result<Seeds, String> {
+    let number = |x: &str| {
+        x.trim()
+            .parse::<u64>()
+            .map_err(|e| format!("{x:?} is not a seed: {e}"))
+    };
+    let seeds: Vec<u64> = match s.split_once('-') {
+        Some((a, b)) => {
+            let (a, b) = (number(a)?, number(b)?);
+            if b < a {
+                return Err(format!("{s:?}: the range ends before it starts"));
+            }
+            (a..=b).collect()
+        }
+        None => s.split(',').map(number).collect::<Result<_, _>>()?,
+    };
+    if seeds.is_empty() || seeds.len() > 1000 {
+        return Err(format!("{s:?}: between 1 and 1000 seeds"));
+    }
+    Ok(Seeds(seeds))
 }
 
 /// The seeds of the complete system's runs (100-199 are the benchmark's).
-fn complete_seeds(quick: bool) -> Vec<u64> {
-    (100..if quick { 103 } else { 110 }).collect()
+fn complete_seeds(args: &NavArgs) -> Vec<u64> {
+    args.seeds
+        .clone()
+        .map(|s| s.0)
+        .unwrap_or_else(|| (100..if args.quick { 103 } else { 110 }).collect())
 }
 
 /// The seeds of the benchmarks over seeds (100-199 are the benchmark's).
@@ -549,7 +585,7 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
         "the default scenario is not the survey"
     );
     if args.complete {
-        let complete = complete::complete_section(&complete_seeds(args.quick), progress)?;
+        let complete = complete::complete_section(&complete_seeds(args), progress)?;
         let result = json!({ "complete": complete, "wall_s": t0.elapsed().as_secs_f64() });
         if args.json {
             println!("{result}");
@@ -599,7 +635,7 @@ pub fn run_bench(args: &NavArgs) -> anyhow::Result<()> {
     let mut dr = dr_manoeuvres(args.quick, progress)?;
     filters_on_manoeuvres(&mut dr, args.quick, progress)?;
     let spikes = spikes(args.quick, progress)?;
-    let complete = complete::complete_section(&complete_seeds(args.quick), progress)?;
+    let complete = complete::complete_section(&complete_seeds(args), progress)?;
     let result = json!({
         "complete": complete,
         "survey": {
@@ -736,6 +772,17 @@ fn print_table(r: &Value) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `--seeds` takes a range or a list and refuses the rest by name.
+    #[test]
+    fn seeds_parse_as_a_range_or_a_list() {
+        assert_eq!(parse_seeds("7-9"), Ok(Seeds(vec![7, 8, 9])));
+        assert_eq!(parse_seeds("100,105"), Ok(Seeds(vec![100, 105])));
+        assert_eq!(parse_seeds("4"), Ok(Seeds(vec![4])));
+        for bad in ["9-7", "a-3", "1,,2", "", "0-1000"] {
+            assert!(parse_seeds(bad).is_err(), "{bad:?}");
+        }
+    }
 
     /// The in-process run is the service's: one solution per AHRS and DVL
     /// sample of `dr` (the inputs that trigger it), and eval finds the

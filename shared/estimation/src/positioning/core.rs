@@ -21,10 +21,10 @@
 use crate::ains::tare::{DepthTare, TareState};
 use crate::local::flat;
 use crate::positioning::ekf::RangeEkf;
-use crate::positioning::frame::{RangeFrame, RangeObs, advance, moved};
+use crate::positioning::frame::{RangeFrame, RangeObs, advance, moved, range_row};
 use crate::positioning::geometry::range_of_flight_m;
 use crate::positioning::pf::BuoyPf;
-use crate::positioning::process::Walk;
+use crate::positioning::process::{BE, BN, BUOY, DIM, Step, VEHICLE};
 use crate::positioning::{
     Gaussian, PositioningEkfParams, PositioningInput, PositioningPfParams, RangeModel, source,
 };
@@ -38,6 +38,10 @@ const TARE_SAMPLES: u64 = 20;
 const SURFACE_GPS_WINDOW_NS: u64 = 1_000_000_000;
 /// The smallest σ a GPS fix is weighed with, m.
 const MIN_GPS_STD_M: f64 = 0.1;
+/// The buoy's track moves its reference to itself when it is farther than
+/// this from it, m (the flat mapping about the reference is then exact to
+/// millimetres).
+const BUOY_RECENTRE_M: f64 = 100.0;
 
 /// The dead-reckoned centre, rad, at `stamp_ns`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -65,6 +69,8 @@ pub struct PositioningStats {
     pub gps_submerged: u64,
     /// Fixes of source [`source::NONE`] published.
     pub silent_fixes: u64,
+    /// Buoy broadcasts beyond the gate from its track, which restarted it.
+    pub buoy_restarts: u64,
 }
 
 /// The state one instance hands another (warm restart, hot swap): every
@@ -76,6 +82,9 @@ pub struct PositioningState {
     pub centre: Option<Centre>,
     /// The filter's distribution about the centre.
     pub offsets: Gaussian,
+    /// The point the buoy's tracked offsets are from, rad, once a buoy
+    /// broadcast came.
+    pub buoy_ref_rad: Option<[f64; 2]>,
     /// The navigation's last north and east velocity, m/s.
     pub velocity_m_s: Option<[f64; 2]>,
     /// The last tared depth, m.
@@ -84,8 +93,9 @@ pub struct PositioningState {
     pub tare: TareState,
     /// The last GPS fix, ns.
     pub last_gps_ns: Option<u64>,
-    /// Time since the filter's state was last moved, s.
-    pub pending_dt_s: f64,
+    /// The time since the filter's state was last moved, and how far the
+    /// centre moved in it.
+    pub pending: Step,
     /// The next silence fix is due at or after this, ns.
     pub next_silence_ns: u64,
     /// The counters.
@@ -105,7 +115,7 @@ pub enum Saved {
 #[derive(Debug, Clone)]
 enum Filter {
     Pf(Box<BuoyPf>),
-    Ekf(RangeEkf),
+    Ekf(Box<RangeEkf>),
 }
 
 /// The positioning estimator (module docs).
@@ -114,11 +124,12 @@ pub struct Positioning {
     model: RangeModel,
     filter: Filter,
     centre: Option<Centre>,
+    buoy_ref: Option<[f64; 2]>,
     velocity: Option<[f64; 2]>,
     depth: Option<f64>,
     tare: DepthTare,
     last_gps_ns: Option<u64>,
-    pending_dt: f64,
+    pending: Step,
     next_silence_ns: u64,
     stats: PositioningStats,
     resume_after: Option<u64>,
@@ -128,7 +139,9 @@ impl Positioning {
     /// The `pf` variant.
     pub fn pf(p: &PositioningPfParams) -> anyhow::Result<Self> {
         p.validate()?;
-        Ok(Self::with(p.model, Filter::Pf(Box::new(BuoyPf::new(p)))))
+        let mut model = p.model;
+        model.track_buoy.get_or_insert(false);
+        Ok(Self::with(model, Filter::Pf(Box::new(BuoyPf::new(p)))))
     }
 
     /// The `ekf` variant.
@@ -136,10 +149,9 @@ impl Positioning {
         p.validate()?;
         Ok(Self::with(
             p.model,
-            Filter::Ekf(RangeEkf::new(
-                p.model.init_half_width_m,
-                p.model.velocity_error_m_s,
-            )),
+            Filter::Ekf(Box::new(RangeEkf::new(
+                &p.model.prior_sigma(p.model.init_half_width_m),
+            ))),
         ))
     }
 
@@ -148,11 +160,12 @@ impl Positioning {
             model,
             filter,
             centre: None,
+            buoy_ref: None,
             velocity: None,
             depth: None,
             tare: DepthTare::new(TARE_SAMPLES),
             last_gps_ns: None,
-            pending_dt: 0.0,
+            pending: Step::default(),
             next_silence_ns: 0,
             stats: PositioningStats::default(),
             resume_after: None,
@@ -199,12 +212,12 @@ impl Positioning {
             lon_rad,
             stamp_ns,
         });
-        let sc = self.model.velocity_error_m_s;
+        let sigma = self.model.prior_sigma(half_width_m);
         match &mut self.filter {
-            Filter::Pf(p) => p.reset(half_width_m, sc),
-            Filter::Ekf(e) => *e = RangeEkf::new(half_width_m, sc),
+            Filter::Pf(p) => p.reset(VEHICLE, &sigma),
+            Filter::Ekf(e) => e.restart(VEHICLE, &sigma),
         }
-        self.pending_dt = 0.0;
+        self.pending = Step::default();
         self.next_silence_ns = stamp_ns.saturating_add(self.silence_ns());
     }
 
@@ -226,9 +239,11 @@ impl Positioning {
             let (lat, lon) = advance(c.lat_rad, c.lon_rad, v, self.depth.unwrap_or(0.0), dt);
             c.lat_rad = lat;
             c.lon_rad = lon;
+            self.pending.displacement_m[0] += v[0] * dt;
+            self.pending.displacement_m[1] += v[1] * dt;
         }
         c.stamp_ns = stamp_ns;
-        self.pending_dt += dt;
+        self.pending.dt_s += dt;
     }
 
     fn fix(&self, stamp_ns: u64, source: u32) -> Option<Fix> {
@@ -262,15 +277,13 @@ impl Positioning {
         self.velocity = Some([v[0], v[1]]);
     }
 
+    /// The filter's motion since it was last moved ([`super::process`]).
     fn apply_walk(&mut self) {
-        let dt = std::mem::take(&mut self.pending_dt);
-        let w = Walk {
-            position_m_rt_s: self.model.position_walk_m_rt_s,
-            velocity_m_s_rt_s: self.model.velocity_walk_m_s_rt_s,
-        };
+        let step = std::mem::take(&mut self.pending);
+        let w = self.model.walk();
         match &mut self.filter {
-            Filter::Pf(p) => p.propagate(&w, dt),
-            Filter::Ekf(e) => e.propagate(&w, dt),
+            Filter::Pf(p) => p.propagate(&w, &step),
+            Filter::Ekf(e) => e.propagate(&w, &step),
         }
     }
 
@@ -376,25 +389,32 @@ impl Positioning {
         };
         self.advance_to(b.stamp_ns);
         self.apply_walk();
+        let buoy = if self.model.tracks_buoy() {
+            self.track_buoy(b)
+        } else {
+            [b.buoy_lat_rad, b.buoy_lon_rad]
+        };
         let range_m = range_of_flight_m(b.time_of_flight_s, b.sound_speed_m_s);
         let obs = RangeObs {
             range_m,
-            var_m2: self.model.range_var_m2(range_m),
-            buoy_lat_rad: b.buoy_lat_rad,
-            buoy_lon_rad: b.buoy_lon_rad,
+            var_m2: self.model.range_var_m2(),
+            buoy_lat_rad: buoy[0],
+            buoy_lon_rad: buoy[1],
             depth_m: depth,
             buoy_depth_m: b.buoy_depth_m,
         };
         let c = self.centre.expect("checked above");
         let frame = RangeFrame::new(c.lat_rad, c.lon_rad, obs);
         // The gate: the innovation at the estimate against σ_d and the
-        // filter's spread along the line of sight.
+        // filter's spread along the line of sight, in the sound speed and
+        // in the buoy's position.
         let g = self.offsets();
-        let h = frame.gradient(g.mean[0], g.mean[1]);
-        let spread = h[0] * (g.cov[0][0] * h[0] + g.cov[0][1] * h[1])
-            + h[1] * (g.cov[1][0] * h[0] + g.cov[1][1] * h[1]);
+        let (h, predicted) = range_row(&frame, &g.mean);
+        let spread: f64 = (0..DIM)
+            .map(|i| (0..DIM).map(|j| h[i] * g.cov[i][j] * h[j]).sum::<f64>())
+            .sum();
         let s = obs.var_m2 + spread.max(0.0);
-        let nu = range_m - frame.predicted_m(g.mean[0], g.mean[1]);
+        let nu = range_m - predicted;
         if !(nu * nu <= self.model.gate_sigmas.powi(2) * s) {
             self.stats.ranges_gated += 1;
             return Err(EstimatorError::new(
@@ -424,17 +444,72 @@ impl Positioning {
         Ok(())
     }
 
+    /// The buoy's broadcast position as a measurement of its tracked
+    /// position ([`super::process`]); the reference its offsets are from.
+    /// The first broadcast starts the track at itself; one beyond the gate
+    /// from the track (a buoy moved, a track gone wrong) starts it again
+    /// there, counted in `buoy_restarts`; a track more than
+    /// [`BUOY_RECENTRE_M`] from its reference moves the reference.
+    fn track_buoy(&mut self, b: &BuoyRangeReading) -> [f64; 2] {
+        let reported = [b.buoy_lat_rad, b.buoy_lon_rad];
+        let var = self.model.buoy_var_m2();
+        let Some(r) = self.buoy_ref else {
+            self.restart_buoy(reported);
+            return reported;
+        };
+        let (zn, ze) = flat::to_local(r[0], r[1], reported[0], reported[1]);
+        let g = self.offsets();
+        let (a, c, d) = (g.cov[BN][BN] + var, g.cov[BN][BE], g.cov[BE][BE] + var);
+        let (nn, ne) = (zn - g.mean[BN], ze - g.mean[BE]);
+        let det = a * d - c * c;
+        let d2 = (d * nn * nn - 2.0 * c * nn * ne + a * ne * ne) / det;
+        if !(det > 0.0 && d2 <= self.model.gate_sigmas.powi(2)) {
+            self.stats.buoy_restarts += 1;
+            self.restart_buoy(reported);
+            return reported;
+        }
+        match &mut self.filter {
+            Filter::Pf(p) => p.update_buoy([zn, ze], var),
+            Filter::Ekf(e) => e.update_buoy([zn, ze], var),
+        }
+        let m = self.offsets().mean;
+        if m[BN].hypot(m[BE]) <= BUOY_RECENTRE_M {
+            return r;
+        }
+        let moved = flat::to_geodetic(r[0], r[1], m[BN], m[BE]);
+        match &mut self.filter {
+            Filter::Pf(p) => p.recentre_buoy([m[BN], m[BE]]),
+            Filter::Ekf(e) => {
+                e.x[BN] -= m[BN];
+                e.x[BE] -= m[BE];
+            }
+        }
+        self.buoy_ref = Some([moved.0, moved.1]);
+        [moved.0, moved.1]
+    }
+
+    /// The buoy's track started at `at` (its reference).
+    fn restart_buoy(&mut self, at: [f64; 2]) {
+        self.buoy_ref = Some(at);
+        let sigma = self.model.prior_sigma(self.model.init_half_width_m);
+        match &mut self.filter {
+            Filter::Pf(p) => p.reset(BUOY, &sigma),
+            Filter::Ekf(e) => e.restart(BUOY, &sigma),
+        }
+    }
+
     /// The state for a snapshot, once there is a position.
     pub fn state(&self) -> Option<PositioningState> {
         self.centre?;
         Some(PositioningState {
             centre: self.centre,
             offsets: self.offsets(),
+            buoy_ref_rad: self.buoy_ref,
             velocity_m_s: self.velocity,
             depth_m: self.depth,
             tare: self.tare.state(),
             last_gps_ns: self.last_gps_ns,
-            pending_dt_s: self.pending_dt,
+            pending: self.pending,
             next_silence_ns: self.next_silence_ns,
             stats: self.stats,
         })
@@ -452,12 +527,13 @@ impl PositioningState {
             .chain(c.iter().flatten())
             .all(|x| x.is_finite())
             && g.effective_particles.is_finite()
-            && self.pending_dt_s.is_finite()
-            && self.pending_dt_s >= 0.0;
+            && self.pending.dt_s.is_finite()
+            && self.pending.dt_s >= 0.0
+            && self.pending.displacement_m.iter().all(|d| d.is_finite());
         // Variances not negative, correlations within ±1 (to rounding).
-        let positive = (0..4).all(|i| {
+        let positive = (0..DIM).all(|i| {
             c[i][i] >= 0.0
-                && (0..4).all(|j| c[i][j] * c[i][j] <= c[i][i] * c[j][j] * (1.0 + 1e-9) + 1e-300)
+                && (0..DIM).all(|j| c[i][j] * c[i][j] <= c[i][i] * c[j][j] * (1.0 + 1e-9) + 1e-300)
         });
         let centre = self.centre.is_none_or(|c| {
             c.lat_rad.is_finite()
@@ -467,8 +543,11 @@ impl PositioningState {
         let v = self
             .velocity_m_s
             .is_none_or(|v| v.iter().all(|x| x.is_finite()));
+        let buoy = self
+            .buoy_ref_rad
+            .is_none_or(|b| b[0].abs() <= std::f64::consts::FRAC_PI_2 && b[1].is_finite());
         let d = self.depth_m.is_none_or(f64::is_finite);
-        finite && positive && centre && v && d
+        finite && positive && centre && v && d && buoy
     }
 }
 
@@ -523,14 +602,15 @@ impl Estimator for Positioning {
         }
         match &mut self.filter {
             Filter::Pf(p) => p.redraw(&s.offsets, stamp_ns),
-            Filter::Ekf(e) => *e = RangeEkf::of(&s.offsets),
+            Filter::Ekf(e) => **e = RangeEkf::of(&s.offsets),
         }
         self.centre = s.centre;
+        self.buoy_ref = s.buoy_ref_rad;
         self.velocity = s.velocity_m_s;
         self.depth = s.depth_m;
         self.tare.set_state(s.tare);
         self.last_gps_ns = s.last_gps_ns;
-        self.pending_dt = s.pending_dt_s;
+        self.pending = s.pending;
         self.next_silence_ns = s.next_silence_ns;
         self.stats = s.stats;
         self.resume_after = Some(stamp_ns);

@@ -1,120 +1,133 @@
 //! `ekf`: a range-only extended Kalman filter on the same inputs as the
-//! particle filter, for comparison. Its state is `x = [n, e, c_n, c_e]`:
-//! the offset of the vehicle from the dead-reckoned centre
-//! ([`super::frame`]; zero after every update, the centre takes it) and
-//! the correction of the navigation's velocity, with covariance `P` (4×4).
+//! particle filter, for comparison. Its state is [`super::process`]'s `x`
+//! (the vehicle's offset from the dead-reckoned centre, zero after every
+//! update since the centre takes it; the velocity correction; the
+//! sound-speed, scale and heading errors; the buoy's position and drift),
+//! with covariance `P`.
 //!
 //! - Prediction over the time since the last message: `x ← F x`, `P ← F P
-//!   Fᵀ + Q` with `F = [[I, Δt I], [0, I]]` and `Q` the integrated random
-//!   walk of [`super::process`] (the particle filter's motion).
-//! - Update: `h(x)` is eqs. 51-53's slant range, `H = [∂h/∂n, ∂h/∂e, 0,
-//!   0]` (the unit vector from the buoy scaled by horizontal over slant
-//!   range); `S = H P Hᵀ + σ_d²`, `K = P Hᵀ / S`, `x ← x + K (d − h(x))`,
-//!   and `P` in Joseph form, `(I − K H) P (I − K H)ᵀ + K σ_d² Kᵀ` (Groves
-//!   2013 §3.2), which stays symmetric and positive over many updates.
+//!   Fᵀ + G Gᵀ` ([`super::process::Step`], the particle filter's motion).
+//! - The buoy's broadcast position: the linear update of `(b_n, b_e)`.
+//! - A range: `h(x) = (1 + s) ρ`, `ρ` eqs. 51-53's slant range between the
+//!   vehicle and the buoy and `s` the sound-speed error, its row `H` from
+//!   [`super::frame::range_row`]; `S = H P Hᵀ + σ_d²`, `K = P Hᵀ / S`, `x ←
+//!   x + K (d − h(x))`, and `P` in Joseph form, `(I − K H) P (I − K H)ᵀ +
+//!   K σ_d² Kᵀ` (Groves 2013 §3.2), which stays symmetric and positive
+//!   over many updates.
 
-use nalgebra::{Matrix4, RowVector4, Vector4};
+use std::ops::Range;
 
 use crate::positioning::Gaussian;
-use crate::positioning::frame::RangeFrame;
-use crate::positioning::process::Walk;
+use crate::positioning::frame::{RangeFrame, range_row};
+use crate::positioning::process::{BE, BN, DIM, E, N, Square, State, Step, Walk};
 
 /// The filter's state about the centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RangeEkf {
     /// `x`.
-    pub x: Vector4<f64>,
+    pub x: State,
     /// `P`.
-    pub p: Matrix4<f64>,
+    pub p: Square,
 }
 
 impl RangeEkf {
-    /// A position uniform in the square of half-width `half_width_m`
-    /// (eq. 48's set, as a Gaussian: variance `h²/3`) and a velocity
-    /// correction of σ `velocity_sigma_m_s`.
-    pub fn new(half_width_m: f64, velocity_sigma_m_s: f64) -> Self {
-        let v = half_width_m * half_width_m / 3.0;
-        let c = velocity_sigma_m_s * velocity_sigma_m_s;
+    /// A state of zero mean and independent values of σ `sigma` (a
+    /// position uniform in a square of half-width `h` is `h/√3`).
+    pub fn new(sigma: &[f64; DIM]) -> Self {
         Self {
-            x: Vector4::zeros(),
-            p: Matrix4::from_diagonal(&Vector4::new(v, v, c, c)),
+            x: State::zeros(),
+            p: Square::from_diagonal(&State::from(sigma.map(|s| s * s))),
+        }
+    }
+
+    /// The values `values` restarted at zero mean with σ `sigma`,
+    /// independent of the others (the rest kept).
+    pub fn restart(&mut self, values: Range<usize>, sigma: &[f64; DIM]) {
+        for i in values {
+            self.x[i] = 0.0;
+            for j in 0..DIM {
+                self.p[(i, j)] = 0.0;
+                self.p[(j, i)] = 0.0;
+            }
+            self.p[(i, i)] = sigma[i] * sigma[i];
         }
     }
 
     /// The state of a Gaussian.
     pub fn of(g: &Gaussian) -> Self {
-        let p = Matrix4::from_fn(|i, j| g.cov[i][j]);
+        let p = Square::from_fn(|i, j| g.cov[i][j]);
         Self {
-            x: Vector4::from(g.mean),
+            x: State::from(g.mean),
             p: (p + p.transpose()) * 0.5,
         }
     }
 
-    /// The prediction over `dt` s.
-    pub fn propagate(&mut self, w: &Walk, dt: f64) {
-        if dt <= 0.0 {
+    /// The prediction over `step`.
+    pub fn propagate(&mut self, w: &Walk, step: &Step) {
+        if step.dt_s <= 0.0 {
             return;
         }
-        let mut f = Matrix4::identity();
-        f[(0, 2)] = dt;
-        f[(1, 3)] = dt;
-        let c = w.covariance(dt);
-        let mut q = Matrix4::zeros();
-        for axis in 0..2 {
-            q[(axis, axis)] = c[0][0];
-            q[(axis, 2 + axis)] = c[0][1];
-            q[(2 + axis, axis)] = c[1][0];
-            q[(2 + axis, 2 + axis)] = c[1][1];
-        }
+        let f = step.transition();
+        let g = step.noise_factor(w);
         self.x = f * self.x;
-        self.p = f * self.p * f.transpose() + q;
+        let p = f * self.p * f.transpose() + g * g.transpose();
+        self.p = (p + p.transpose()) * 0.5;
     }
 
     /// One range; the position correction the centre takes (the state's
     /// offset is then zero).
     pub fn update(&mut self, f: &RangeFrame) -> [f64; 2] {
         let obs = *f.obs();
-        let g = f.gradient(self.x[0], self.x[1]);
-        let h = RowVector4::new(g[0], g[1], 0.0, 0.0);
-        let ph = self.p * h.transpose();
-        let s = (h * ph)[(0, 0)] + obs.var_m2;
-        let k = ph / s;
-        let nu = obs.range_m - f.predicted_m(self.x[0], self.x[1]);
-        self.x += k * nu;
-        let a = Matrix4::identity() - k * h;
-        let p = a * self.p * a.transpose() + k * k.transpose() * obs.var_m2;
-        self.p = (p + p.transpose()) * 0.5;
-        let by = [self.x[0], self.x[1]];
-        self.x[0] = 0.0;
-        self.x[1] = 0.0;
-        by
+        let x: [f64; DIM] = self.x.into();
+        let (h, predicted) = range_row(f, &x);
+        self.linear_update(&State::from(h), obs.range_m - predicted, obs.var_m2);
+        self.take_offset()
     }
 
     /// A position measurement `z` (north, east offsets, m) of variance
     /// `var_m2` per axis (a GPS fix at the surface): the linear update with
     /// `H = [I 0]`; the position correction the centre takes.
     pub fn update_position(&mut self, z: [f64; 2], var_m2: f64) -> [f64; 2] {
-        for axis in 0..2 {
-            let mut h = RowVector4::zeros();
+        self.update_pair([N, E], z, var_m2);
+        self.take_offset()
+    }
+
+    /// The buoy's broadcast position `z` (north, east of its reference, m)
+    /// of variance `var_m2` per axis.
+    pub fn update_buoy(&mut self, z: [f64; 2], var_m2: f64) {
+        self.update_pair([BN, BE], z, var_m2);
+    }
+
+    fn update_pair(&mut self, at: [usize; 2], z: [f64; 2], var_m2: f64) {
+        for (axis, z) in at.into_iter().zip(z) {
+            let mut h = State::zeros();
             h[axis] = 1.0;
-            let ph = self.p * h.transpose();
-            let s = ph[axis] + var_m2;
-            let k = ph / s;
-            self.x += k * (z[axis] - self.x[axis]);
-            let a = Matrix4::identity() - k * h;
-            let p = a * self.p * a.transpose() + k * k.transpose() * var_m2;
-            self.p = (p + p.transpose()) * 0.5;
+            self.linear_update(&h, z - self.x[axis], var_m2);
         }
-        let by = [self.x[0], self.x[1]];
-        self.x[0] = 0.0;
-        self.x[1] = 0.0;
+    }
+
+    /// A scalar update with the row `h`, innovation `nu` and variance `r`.
+    fn linear_update(&mut self, h: &State, nu: f64, r: f64) {
+        let ph = self.p * h;
+        let s = h.dot(&ph) + r;
+        let k = ph / s;
+        self.x += k * nu;
+        let a = Square::identity() - k * h.transpose();
+        let p = a * self.p * a.transpose() + k * k.transpose() * r;
+        self.p = (p + p.transpose()) * 0.5;
+    }
+
+    fn take_offset(&mut self) -> [f64; 2] {
+        let by = [self.x[N], self.x[E]];
+        self.x[N] = 0.0;
+        self.x[E] = 0.0;
         by
     }
 
     /// The estimate about the centre.
     pub fn estimate(&self) -> Gaussian {
         Gaussian {
-            mean: [self.x[0], self.x[1], self.x[2], self.x[3]],
+            mean: std::array::from_fn(|i| self.x[i]),
             cov: std::array::from_fn(|i| std::array::from_fn(|j| self.p[(i, j)])),
             effective_particles: 0.0,
         }

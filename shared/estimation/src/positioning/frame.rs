@@ -9,6 +9,7 @@
 use crate::earth::{meridian_radius, transverse_radius};
 use crate::local::flat;
 use crate::positioning::geometry::{haversine_m, radius_in_azimuth, slant_range_m};
+use crate::positioning::process::{BE, BN, DIM, E, N, SOUND};
 
 /// One buoy range, as the filters use it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -17,9 +18,10 @@ pub struct RangeObs {
     pub range_m: f64,
     /// Its variance (eq. 54's σ_d²), m².
     pub var_m2: f64,
-    /// Buoy latitude, rad.
+    /// Latitude of the point the buoy's offsets are from, rad (its
+    /// broadcast position when the buoy is not tracked).
     pub buoy_lat_rad: f64,
-    /// Buoy longitude, rad.
+    /// Its longitude, rad.
     pub buoy_lon_rad: f64,
     /// Depth of the vehicle, m.
     pub depth_m: f64,
@@ -35,6 +37,9 @@ pub struct RangeFrame {
     lon_rad: f64,
     r_north: f64,
     r_east: f64,
+    /// The same at the buoy's reference.
+    buoy_r_north: f64,
+    buoy_r_east: f64,
     radius: f64,
     obs: RangeObs,
 }
@@ -51,6 +56,8 @@ impl RangeFrame {
             lon_rad,
             r_north: meridian_radius(lat_rad),
             r_east: transverse_radius(lat_rad) * lat_rad.cos(),
+            buoy_r_north: meridian_radius(obs.buoy_lat_rad),
+            buoy_r_east: transverse_radius(obs.buoy_lat_rad) * obs.buoy_lat_rad.cos(),
             radius: radius_in_azimuth(lat_rad, azimuth),
             obs,
         }
@@ -61,35 +68,53 @@ impl RangeFrame {
         &self.obs
     }
 
-    /// Eqs. 51-53: the slant range from the buoy to the vehicle at offset
-    /// `(north, east)` from the centre, m.
-    pub fn predicted_m(&self, north_m: f64, east_m: f64) -> f64 {
+    /// Eqs. 51-53: the slant range from the buoy at offset `buoy` (north,
+    /// east, m) from its reference to the vehicle at offset `(north,
+    /// east)` from the centre, m.
+    pub fn predicted_m(&self, north_m: f64, east_m: f64, buoy: [f64; 2]) -> f64 {
         let lat = self.lat_rad + north_m / self.r_north;
         let lon = self.lon_rad + east_m / self.r_east;
         let h = haversine_m(
             lat,
             lon,
-            self.obs.buoy_lat_rad,
-            self.obs.buoy_lon_rad,
+            self.obs.buoy_lat_rad + buoy[0] / self.buoy_r_north,
+            self.obs.buoy_lon_rad + buoy[1] / self.buoy_r_east,
             self.radius,
         );
         slant_range_m(h, self.obs.depth_m, self.obs.buoy_depth_m)
     }
 
-    /// The gradient of [`Self::predicted_m`] with the offset at `(north,
-    /// east)`, per m (the EKF's `H`, and the gate's line of sight): by
-    /// central differences of a centimetre, exact to 10⁻⁸ for ranges of
-    /// metres and more (the unit vector from the buoy, scaled by
-    /// horizontal over slant range).
-    pub fn gradient(&self, north_m: f64, east_m: f64) -> [f64; 2] {
+    /// The gradient of [`Self::predicted_m`] with the vehicle's offset at
+    /// `(north, east)`, per m (the EKF's `H`, and the gate's line of
+    /// sight; the buoy's is its negative): by central differences of a
+    /// centimetre, exact to 10⁻⁸ for ranges of metres and more (the unit
+    /// vector from the buoy, scaled by horizontal over slant range).
+    pub fn gradient(&self, north_m: f64, east_m: f64, buoy: [f64; 2]) -> [f64; 2] {
         const H: f64 = 0.01;
+        let p = |n, e| self.predicted_m(n, e, buoy);
         [
-            (self.predicted_m(north_m + H, east_m) - self.predicted_m(north_m - H, east_m))
-                / (2.0 * H),
-            (self.predicted_m(north_m, east_m + H) - self.predicted_m(north_m, east_m - H))
-                / (2.0 * H),
+            (p(north_m + H, east_m) - p(north_m - H, east_m)) / (2.0 * H),
+            (p(north_m, east_m + H) - p(north_m, east_m - H)) / (2.0 * H),
         ]
     }
+}
+
+/// A range's row of `H` at the state `x` and the range `h(x)` it
+/// predicts: `h(x) = (1 + s) ρ(n, e, b_n, b_e)` ([`super::process`]'s
+/// values), `∂h/∂(n, e) = (1 + s) ∂ρ/∂(n, e)`, `∂h/∂(b_n, b_e)` its
+/// negative, `∂h/∂s = ρ`.
+pub fn range_row(f: &RangeFrame, x: &[f64; DIM]) -> ([f64; DIM], f64) {
+    let buoy = [x[BN], x[BE]];
+    let rho = f.predicted_m(x[N], x[E], buoy);
+    let g = f.gradient(x[N], x[E], buoy);
+    let scale = 1.0 + x[SOUND];
+    let mut h = [0.0; DIM];
+    h[N] = scale * g[0];
+    h[E] = scale * g[1];
+    h[BN] = -scale * g[0];
+    h[BE] = -scale * g[1];
+    h[SOUND] = rho;
+    (h, scale * rho)
 }
 
 /// Paper 000 eq. 50 for the centre: `dt` s at north and east velocity
@@ -128,10 +153,11 @@ mod tests {
                 buoy_depth_m: 1.0,
             },
         );
-        let g = f.gradient(2.0, 3.0);
+        let at = [0.0; 2];
+        let g = f.gradient(2.0, 3.0, at);
         let h = 1e-3;
-        let dn = (f.predicted_m(2.0 + h, 3.0) - f.predicted_m(2.0 - h, 3.0)) / (2.0 * h);
-        let de = (f.predicted_m(2.0, 3.0 + h) - f.predicted_m(2.0, 3.0 - h)) / (2.0 * h);
+        let dn = (f.predicted_m(2.0 + h, 3.0, at) - f.predicted_m(2.0 - h, 3.0, at)) / (2.0 * h);
+        let de = (f.predicted_m(2.0, 3.0 + h, at) - f.predicted_m(2.0, 3.0 - h, at)) / (2.0 * h);
         assert!(
             (g[0] - dn).abs() < 1e-4 && (g[1] - de).abs() < 1e-4,
             "{g:?} {dn} {de}"
@@ -146,7 +172,14 @@ mod tests {
             (g[0] - hn / slant).abs() < 1e-2 && (g[1] - he / slant).abs() < 1e-2,
             "{g:?}"
         );
-        let d = f.predicted_m(0.0, 0.0);
+        let d = f.predicted_m(0.0, 0.0, at);
         assert!((d - (120f64.hypot(250.0)).hypot(29.0)).abs() < 0.01, "{d}");
+        // The buoy moved by an offset is the vehicle moved by its opposite.
+        let moved_buoy = f.predicted_m(0.0, 0.0, [3.0, -4.0]);
+        let moved_vehicle = f.predicted_m(-3.0, 4.0, at);
+        assert!(
+            (moved_buoy - moved_vehicle).abs() < 1e-3,
+            "{moved_buoy} {moved_vehicle}"
+        );
     }
 }

@@ -72,16 +72,17 @@ impl Stamped for crate::readings::Fix {
     }
 }
 
-/// A distribution of the filters' state about the centre: `[n, e, c_n,
-/// c_e]`, the offset north and east (m) and the correction of the
-/// navigation's north and east velocity (m/s); and the particle filter's
-/// effective count (0 for the EKF).
+/// A distribution of the filters' state about the centre
+/// ([`process`]'s `x`: the offset north and east, m, the correction of
+/// the navigation's north and east velocity, m/s, the sound-speed, scale
+/// and heading errors); and the particle filter's effective count (0 for
+/// the EKF).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Gaussian {
     /// Mean.
-    pub mean: [f64; 4],
+    pub mean: [f64; process::DIM],
     /// Covariance, row-major.
-    pub cov: [[f64; 4]; 4],
+    pub cov: [[f64; process::DIM]; process::DIM],
     /// Effective particle count (eq. 46).
     pub effective_particles: f64,
 }

@@ -7,39 +7,72 @@
 use serde::Deserialize;
 
 use crate::params::{OutOfRange, in_range, nonneg, positive};
+use crate::positioning::process::{BE, BN, CE, CN, DIM, E, HEADING, N, SCALE, SOUND, UE, UN, Walk};
 
 /// Largest particle count.
 pub const MAX_PARTICLES: usize = 65_536;
 
-/// What both variants share: the range's error model, the gate, the
-/// surface rule and the process noise between messages.
+/// What both variants share: the range's error model, the state's priors
+/// and random walks ([`super::process`]), the gate and the surface rule.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RangeModel {
     /// The range's own noise, m: the sound speed times the modem clocks'
     /// synchronisation jitter (1 ms at 1500 m/s). Default 1.5.
     pub range_sigma_m: f64,
-    /// The relative error of the sound speed the buoy reports, 1σ: its
-    /// share of eq. 54's σ_d grows with the range. Default 0.003.
+    /// σ of the relative error of the sound speed the buoy reports at a
+    /// start (the prior of the state `s`: a measured range is `(1 + s)`
+    /// times the geometric one). Default 0.003.
     pub sound_speed_rel_sigma: f64,
+    /// `q_s`, random walk of that error, 1/√s. Default 0.
+    pub sound_speed_walk_rt_s: f64,
     /// The error of the buoy's GPS position in its broadcast, m per
-    /// horizontal axis. Default 2.5.
+    /// horizontal axis, independent between broadcasts. Default 2.5.
     pub buoy_sigma_m: f64,
+    /// Track the buoy ([`super::process`]'s `b`, `u`) with its broadcasts
+    /// as measurements; `false` takes each broadcast position as it comes,
+    /// its error a part of eq. 54's σ_d (paper 000). Default: true for
+    /// `ekf`, false for `pf` ([`Self::tracks_buoy`]): in the particles the
+    /// buoy's four values starve the set (survey, development seeds 7-9,
+    /// `posdev`: the `pf`'s horizontal error 4.5-6.0 m with them, 2.0-2.4
+    /// m without, particle seeds 0-2; the `ekf`'s 1.7 m with, 1.9 m
+    /// without; BENCHMARKS.md, "error budget").
+    pub track_buoy: Option<bool>,
+    /// `q_b`, random walk of the buoy's position, m/√s (its wandering
+    /// about a steady drift: waves, wind, a mooring's swing). Default 0.05
+    /// (the simulator's buoy).
+    pub buoy_walk_m_rt_s: f64,
+    /// σ of the buoy's drift at its first broadcast, m/s per axis.
+    /// Default 0.05.
+    pub buoy_drift_m_s: f64,
+    /// `q_u`, random walk of that drift, m/s/√s. Default 1e-4 (0.005 m/s
+    /// over a 40-minute dive).
+    pub buoy_drift_walk_m_s_rt_s: f64,
     /// `q_p`, random walk of the vehicle's position between messages,
     /// m/√s ([`super::process`]): the navigation's white velocity error,
     /// integrated (eq. 50 has no noise; without it the set collapses).
     /// Default 0.02.
     pub position_walk_m_rt_s: f64,
-    /// σ of the correction of the navigation's velocity at a start, m/s
-    /// per axis. Default 0.002: the aided INS `pf` on the survey (seed 7,
-    /// the development seed) errs by a mean of 0.0002 / −0.0013 m/s north /
-    /// east over the dive, 0.007 m/s RMS of which integrates to only
-    /// 0.3-0.4 m over 300 s (BENCHMARKS.md, "Acoustic positioning"); a
-    /// looser prior (0.02 before) lets the filter follow each noisy range.
+    /// σ of the correction of the navigation's velocity fixed in NED at a
+    /// start, m/s per axis. Default 0.005 (a 0.2° heading deviation at 1.5
+    /// m/s): the aided INS `pf` on the survey's development seeds 7-9 errs
+    /// by −0.0012, −0.0085 and −0.0018 m/s east over the dive, the same on
+    /// legs of opposite direction ([`super::process`]); the former 0.002,
+    /// measured on seed 7 alone, put seed 8's at 4σ and let its east error
+    /// grow to 4 m before the ranges caught up.
     pub velocity_error_m_s: f64,
-    /// `q_v`, random walk of that correction, m/s/√s. Default 1e-5 (0.0005
-    /// m/s over the 2600 s survey; development seeds 7-9).
+    /// `q_c`, random walk of that correction, m/s/√s. Default 1e-5.
     pub velocity_walk_m_s_rt_s: f64,
+    /// σ of the navigation's velocity scale error at a start (the state
+    /// `k`). Default 0.
+    pub scale_error: f64,
+    /// `q_k`, its random walk, 1/√s. Default 0.
+    pub scale_walk_rt_s: f64,
+    /// σ of the navigation's heading error at a start (the state `ψ`),
+    /// rad. Default 0.
+    pub heading_error_rad: f64,
+    /// `q_ψ`, its random walk, rad/√s. Default 0.
+    pub heading_walk_rad_rt_s: f64,
     /// The gate: a range whose innovation is more than this many of its σ
     /// (eq. 54's σ_d with the filter's own spread) is refused and counted
     /// (multipath, clock jumps). Default 4.
@@ -61,10 +94,19 @@ impl Default for RangeModel {
         Self {
             range_sigma_m: 1.5,
             sound_speed_rel_sigma: 0.003,
+            sound_speed_walk_rt_s: 0.0,
             buoy_sigma_m: 2.5,
+            track_buoy: None,
+            buoy_walk_m_rt_s: 0.05,
+            buoy_drift_m_s: 0.05,
+            buoy_drift_walk_m_s_rt_s: 1e-4,
             position_walk_m_rt_s: 0.02,
-            velocity_error_m_s: 0.002,
+            velocity_error_m_s: 0.005,
             velocity_walk_m_s_rt_s: 1e-5,
+            scale_error: 0.0,
+            scale_walk_rt_s: 0.0,
+            heading_error_rad: 0.0,
+            heading_walk_rad_rt_s: 0.0,
             gate_sigmas: 4.0,
             surface_depth_m: 4.0,
             init_half_width_m: 5.0,
@@ -74,10 +116,71 @@ impl Default for RangeModel {
 }
 
 impl RangeModel {
-    /// Eq. 54's σ_d² for a range of `range_m`, m².
-    pub fn range_var_m2(&self, range_m: f64) -> f64 {
-        let c = self.sound_speed_rel_sigma * range_m;
-        self.range_sigma_m.powi(2) + c * c + self.buoy_sigma_m.powi(2)
+    /// Whether the buoy is tracked (unset: yes; the `pf` variant sets it
+    /// to no when it is unset).
+    pub fn tracks_buoy(&self) -> bool {
+        self.track_buoy.unwrap_or(true)
+    }
+
+    /// Eq. 54's σ_d² of one range, m²: its own noise, and the buoy's GPS
+    /// when the buoy is not tracked (the sound speed's share is the state
+    /// `s`, the tracked buoy's the states `b`).
+    pub fn range_var_m2(&self) -> f64 {
+        let buoy = if self.tracks_buoy() {
+            0.0
+        } else {
+            self.buoy_sigma_m.powi(2)
+        };
+        self.range_sigma_m.powi(2) + buoy
+    }
+
+    /// The variance of the buoy's broadcast position per axis, m² (at
+    /// least a centimetre's).
+    pub fn buoy_var_m2(&self) -> f64 {
+        self.buoy_sigma_m.max(0.01).powi(2)
+    }
+
+    /// σ of each value of the state at a start with the position uniform in
+    /// a square of half-width `half_width_m` (σ `h/√3`), the buoy at its
+    /// broadcast position (zero when it is not tracked).
+    pub fn prior_sigma(&self, half_width_m: f64) -> [f64; DIM] {
+        let p = half_width_m / 3f64.sqrt();
+        let mut s = [0.0; DIM];
+        s[N] = p;
+        s[E] = p;
+        s[CN] = self.velocity_error_m_s;
+        s[CE] = self.velocity_error_m_s;
+        s[SOUND] = self.sound_speed_rel_sigma;
+        s[SCALE] = self.scale_error;
+        s[HEADING] = self.heading_error_rad;
+        if self.tracks_buoy() {
+            s[BN] = self.buoy_sigma_m.max(0.01);
+            s[BE] = s[BN];
+            s[UN] = self.buoy_drift_m_s;
+            s[UE] = self.buoy_drift_m_s;
+        }
+        s
+    }
+
+    /// The random walks (the buoy's zero when it is not tracked).
+    pub fn walk(&self) -> Walk {
+        Walk {
+            position_m_rt_s: self.position_walk_m_rt_s,
+            velocity_m_s_rt_s: self.velocity_walk_m_s_rt_s,
+            sound_speed_rt_s: self.sound_speed_walk_rt_s,
+            scale_rt_s: self.scale_walk_rt_s,
+            heading_rad_rt_s: self.heading_walk_rad_rt_s,
+            buoy_m_rt_s: if self.tracks_buoy() {
+                self.buoy_walk_m_rt_s
+            } else {
+                0.0
+            },
+            buoy_drift_m_s_rt_s: if self.tracks_buoy() {
+                self.buoy_drift_walk_m_s_rt_s
+            } else {
+                0.0
+            },
+        }
     }
 
     fn check(&self) -> Result<(), OutOfRange> {
@@ -90,7 +193,39 @@ impl RangeModel {
             false,
             "[0, 0.5]",
         )?;
+        in_range(
+            "sound_speed_walk_rt_s",
+            self.sound_speed_walk_rt_s,
+            0.0,
+            0.01,
+            false,
+            "[0, 0.01]",
+        )?;
         nonneg("buoy_sigma_m", self.buoy_sigma_m)?;
+        in_range(
+            "buoy_walk_m_rt_s",
+            self.buoy_walk_m_rt_s,
+            0.0,
+            100.0,
+            false,
+            "[0, 100]",
+        )?;
+        in_range(
+            "buoy_drift_m_s",
+            self.buoy_drift_m_s,
+            0.0,
+            10.0,
+            false,
+            "[0, 10]",
+        )?;
+        in_range(
+            "buoy_drift_walk_m_s_rt_s",
+            self.buoy_drift_walk_m_s_rt_s,
+            0.0,
+            1.0,
+            false,
+            "[0, 1]",
+        )?;
         nonneg("position_walk_m_rt_s", self.position_walk_m_rt_s)?;
         in_range(
             "velocity_error_m_s",
@@ -107,6 +242,31 @@ impl RangeModel {
             1.0,
             false,
             "[0, 1]",
+        )?;
+        in_range("scale_error", self.scale_error, 0.0, 0.5, false, "[0, 0.5]")?;
+        in_range(
+            "scale_walk_rt_s",
+            self.scale_walk_rt_s,
+            0.0,
+            0.01,
+            false,
+            "[0, 0.01]",
+        )?;
+        in_range(
+            "heading_error_rad",
+            self.heading_error_rad,
+            0.0,
+            0.5,
+            false,
+            "[0, 0.5]",
+        )?;
+        in_range(
+            "heading_walk_rad_rt_s",
+            self.heading_walk_rad_rt_s,
+            0.0,
+            0.01,
+            false,
+            "[0, 0.01]",
         )?;
         in_range(
             "gate_sigmas",
@@ -142,12 +302,12 @@ pub struct PositioningPfParams {
     /// `N_th / N`: resample when the effective particle count (eq. 46)
     /// falls below this share of `N`. Default 0.5.
     pub resample_threshold: f64,
-    /// Half-width of the square the set is completed in around the best
-    /// particle after eq. 55's reproduction, m. Default 3.
-    pub fill_half_width_m: f64,
-    /// Half-width of the same completion in the velocity correction, m/s.
-    /// Default 0.002 (the correction's prior σ).
-    pub fill_velocity_m_s: f64,
+    /// The completion of the set after eq. 55's reproduction draws
+    /// particles around the best particle, uniform in a box of this many
+    /// of the reproduced set's σ in the set's own axes (its covariance's
+    /// Cholesky factor times a uniform of half-width `√3` times this).
+    /// Default 1.
+    pub fill_spread: f64,
     /// The range model, gate and surface rule.
     pub model: RangeModel,
 }
@@ -158,8 +318,7 @@ impl Default for PositioningPfParams {
             particles: 1000,
             seed: 0,
             resample_threshold: 0.5,
-            fill_half_width_m: 3.0,
-            fill_velocity_m_s: 0.002,
+            fill_spread: 1.0,
             model: RangeModel::default(),
         }
     }
@@ -183,8 +342,7 @@ impl PositioningPfParams {
                 false,
                 "[0, 1]",
             )?;
-            positive("fill_half_width_m", self.fill_half_width_m)?;
-            nonneg("fill_velocity_m_s", self.fill_velocity_m_s)?;
+            in_range("fill_spread", self.fill_spread, 0.0, 10.0, false, "[0, 10]")?;
             self.model.check()
         })();
         r.map_err(out_of_range)
