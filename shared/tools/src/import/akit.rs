@@ -17,8 +17,11 @@
 //!   becomes `sensor/imu` in FRD. Measured against the reference
 //!   (`docs/analysis/akit_imu_frame.py`, trajectories 1-4): the file's
 //!   clock runs [`IMU_CLOCK_SCALE`] times slow against the reference's and
-//!   starts [`IMU_CLOCK_OFFSET_S`] before it, so each sample is stamped at
-//!   `scale · t + offset`; its X and Z axes are FRD's, its Y axis points
+//!   is offset from it by a fraction of a second that differs between
+//!   files (+0.40 to +0.48 s on 1-4, −0.50 to −0.46 s on four of the
+//!   held-out ones), so each sample is stamped at `scale · t + offset`, the
+//!   offset fitted per file to the AHRS channel's heading (see
+//!   [`fit_imu_clock_offset`]); its X and Z axes are FRD's, its Y axis points
 //!   left (gyro Y against the reference's pitch rate and accelerometer Y
 //!   against the centripetal acceleration both −1.0), so both Y channels
 //!   are negated. The sense of Y is decided per file from the correlation
@@ -111,6 +114,8 @@ pub struct Trajectory {
 /// How the IMU file's axes compare with the reference's body rates.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImuCheck {
+    /// The offset of the IMU's clock fitted against the heading, s.
+    pub clock_offset_s: f64,
     /// The correlation of the file's gyro Y with the reference's pitch
     /// rate: negative for the data set's Y-left axes.
     pub gyro_y_pitch_correlation: f64,
@@ -122,15 +127,14 @@ pub struct ImuCheck {
 }
 
 /// The IMU file's clock against the reference's: a sample at file time `t`
-/// is at reference time `IMU_CLOCK_SCALE · t + IMU_CLOCK_OFFSET_S`. The
-/// reference's rows are 400/399 s apart and the IMU's 400/39999 s: 400 s of
-/// file time span 401.3 s of the reference's (a yaw rate residual of 0.2-0.8
-/// mrad per interval with this map against 11-31 without; fitted scale
-/// 1.00225-1.00250 and offset 0.40-0.48 s on trajectories 1-4:
-/// `docs/analysis/akit_imu_frame.py`).
+/// is at reference time `IMU_CLOCK_SCALE · t + offset`. The reference's
+/// rows are 400/399 s apart and the IMU's 400/39999 s: 400 s of file time
+/// span 401 s of the reference's (fitted scale 1.00225-1.00250 on
+/// trajectories 1-4, a yaw rate residual of 0.2-0.8 mrad per interval with
+/// the map against 11-31 without: `docs/analysis/akit_imu_frame.py`).
 pub const IMU_CLOCK_SCALE: f64 = 400.0 / 399.0;
-/// See [`IMU_CLOCK_SCALE`], s (the mean of trajectories 1-4).
-pub const IMU_CLOCK_OFFSET_S: f64 = 0.44;
+/// The offsets [`fit_imu_clock_offset`] searches, s.
+const IMU_CLOCK_OFFSET_RANGE_S: (f64, f64) = (-2.0, 2.0);
 /// A DVL sample's velocity belongs this long after its stamp on the
 /// reference's clock, s (fitted on trajectories 1-4:
 /// `docs/analysis/akit_dvl_timing.py`). With `--imu` the import stamps the
@@ -292,12 +296,16 @@ pub fn read(dir: &Path, imu: bool) -> anyhow::Result<Trajectory> {
             .into_iter()
             .map(|r| {
                 (
-                    IMU_CLOCK_SCALE * r[0] + IMU_CLOCK_OFFSET_S,
+                    IMU_CLOCK_SCALE * r[0],
                     [r[1], r[2], r[3]],
                     [r[4], r[5], r[6]],
                 )
             })
             .collect();
+        let offset_s = fit_imu_clock_offset(&rows, &reference);
+        for r in &mut rows {
+            r.0 += offset_s;
+        }
         let c = gyro_y_pitch_correlation(&rows, &reference);
         let y_negated = c < 0.0;
         if y_negated {
@@ -319,6 +327,7 @@ pub fn read(dir: &Path, imu: bool) -> anyhow::Result<Trajectory> {
             );
         }
         let check = ImuCheck {
+            clock_offset_s: offset_s,
             gyro_y_pitch_correlation: c,
             y_negated,
             rate_correlation,
@@ -368,19 +377,7 @@ fn angle_increments(imu: &[ImuRow], reference: &[Reference]) -> Vec<([f64; 3], [
         if covered < 0.9 * (b - a) {
             continue;
         }
-        let [r0, p0, y0] = w[0].euler_rad;
-        let [r1, p1, y1] = w[1].euler_rad;
-        let c0 = Rotation::<Frd, Ned>::from_euler(r0, p0, y0);
-        let c1 = Rotation::<Frd, Ned>::from_euler(r1, p1, y1);
-        let [qw, qx, qy, qz] = (c0.inverse() * c1).to_wxyz();
-        let v = (qx * qx + qy * qy + qz * qz).sqrt();
-        let angle = 2.0 * v.atan2(qw.abs());
-        let s = if v > 0.0 {
-            angle / v * qw.signum()
-        } else {
-            2.0
-        };
-        out.push((gyro, [s * qx, s * qy, s * qz]));
+        out.push((gyro, body_increment(&w[0], &w[1])));
     }
     out
 }
@@ -401,6 +398,84 @@ fn correlation(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
     } else {
         0.0
     }
+}
+
+/// The offset of the IMU's clock (`imu` on [`IMU_CLOCK_SCALE`]'s scale,
+/// without offset) against the reference's: the one that makes the gyro Z
+/// angle over each reference interval closest (least squares) to the
+/// heading's increment there, searched over [`IMU_CLOCK_OFFSET_RANGE_S`]
+/// by 0.01 s and then by 0.001 s. A time synchronisation against the AHRS
+/// channel, which the navigation takes as input: the files were cut from
+/// the logs with offsets that differ by file (no constant fits all 13).
+/// Gyro Z and the heading are about the same axis for any sense of Y.
+pub fn fit_imu_clock_offset(imu: &[ImuRow], reference: &[Reference]) -> f64 {
+    if imu.len() < 2 || reference.len() < 2 {
+        return 0.0;
+    }
+    // The gyro Z angle from the first sample on (trapezoids).
+    let mut angle = Vec::with_capacity(imu.len());
+    let mut sum = 0.0;
+    angle.push(0.0);
+    for w in imu.windows(2) {
+        sum += 0.5 * (w[0].2[2] + w[1].2[2]) * (w[1].0 - w[0].0);
+        angle.push(sum);
+    }
+    let angle_at = |t: f64| -> Option<f64> {
+        let i = imu.partition_point(|r| r.0 < t);
+        if i == 0 || i >= imu.len() {
+            return None;
+        }
+        let (t0, t1) = (imu[i - 1].0, imu[i].0);
+        let f = (t - t0) / (t1 - t0);
+        Some(angle[i - 1] + f * (angle[i] - angle[i - 1]))
+    };
+    let turns: Vec<f64> = reference
+        .windows(2)
+        .map(|w| body_increment(&w[0], &w[1])[2])
+        .collect();
+    let residual = |offset: f64| -> f64 {
+        let (mut sum, mut n) = (0.0, 0usize);
+        for (w, turn) in reference.windows(2).zip(&turns) {
+            if let (Some(a), Some(b)) = (angle_at(w[0].t_s - offset), angle_at(w[1].t_s - offset)) {
+                let d = (b - a) - turn;
+                sum += d * d;
+                n += 1;
+            }
+        }
+        // Fewer than half the intervals covered: not a candidate.
+        if 2 * n < reference.len() {
+            f64::INFINITY
+        } else {
+            sum / n as f64
+        }
+    };
+    let best = |from: f64, to: f64, step: f64| -> f64 {
+        let n = ((to - from) / step).round() as i64;
+        (0..=n)
+            .map(|k| from + k as f64 * step)
+            .min_by(|a, b| residual(*a).total_cmp(&residual(*b)))
+            .unwrap_or(0.0)
+    };
+    let (lo, hi) = IMU_CLOCK_OFFSET_RANGE_S;
+    let coarse = best(lo, hi, 0.01);
+    best(coarse - 0.01, coarse + 0.01, 0.001)
+}
+
+/// The rotation vector of the attitude from `a` to `b`, in the body (FRD).
+fn body_increment(a: &Reference, b: &Reference) -> [f64; 3] {
+    let [r0, p0, y0] = a.euler_rad;
+    let [r1, p1, y1] = b.euler_rad;
+    let c0 = Rotation::<Frd, Ned>::from_euler(r0, p0, y0);
+    let c1 = Rotation::<Frd, Ned>::from_euler(r1, p1, y1);
+    let [qw, qx, qy, qz] = (c0.inverse() * c1).to_wxyz();
+    let v = (qx * qx + qy * qy + qz * qz).sqrt();
+    let angle = 2.0 * v.atan2(qw.abs());
+    let s = if v > 0.0 {
+        angle / v * qw.signum()
+    } else {
+        2.0
+    };
+    [s * qx, s * qy, s * qz]
 }
 
 /// The correlation, over the reference's intervals, of the gyro Y angle
@@ -432,7 +507,7 @@ pub fn manifest(t: &Trajectory, variant: &str, duration_s: f64) -> String {
     let name = &t.name;
     let timing = if t.imu.is_some() {
         "# The DVL and the IMU are stamped on the reference's clock (the import:\n\
-         # DVL_LAG_S, IMU_CLOCK_SCALE and IMU_CLOCK_OFFSET_S), so no delay here.\n\
+         # DVL_LAG_S; the IMU's clock fitted to the AHRS heading), so no delay.\n\
          # The AHRS channel is the reference's heading (a FOG INS,\n\
          # post-processed): 0.1 deg white and 0.1 deg slow error for `ekf`\n\
          # (1.0 deg and 2 deg, its defaults for a magnetic AHRS, give 0.553 /\n\
@@ -523,7 +598,7 @@ pub fn write(t: &Trajectory, source: &Path, out: &Path, variant: &str) -> anyhow
         );
         import.insert(
             "imu_clock".to_owned(),
-            format!("{IMU_CLOCK_SCALE} t + {IMU_CLOCK_OFFSET_S} s"),
+            format!("{IMU_CLOCK_SCALE} t + {:.3} s", c.clock_offset_s),
         );
         import.insert("dvl_lag_s".to_owned(), t.dvl_lag_s.to_string());
     }

@@ -11,6 +11,9 @@ use super::*;
 
 const G: f64 = 9.8;
 const SPACING_S: f64 = 400.0 / 399.0;
+/// The IMU clock's offset the files are written with (about held-out
+/// trajectory 5's); the import fits it.
+const OFFSET_S: f64 = -0.47;
 
 /// The attitude at reference time `t`: a weave in yaw, pitch and roll.
 fn euler(t: f64) -> [f64; 3] {
@@ -41,7 +44,7 @@ fn specific_force(t: f64) -> [f64; 3] {
 
 /// Writes a 120-sample trajectory; the IMU's axes are FRD's with `signs`
 /// applied to gyro and accelerometer alike, on the file clock that
-/// [`IMU_CLOCK_SCALE`] and [`IMU_CLOCK_OFFSET_S`] undo.
+/// [`IMU_CLOCK_SCALE`] and [`OFFSET_S`] undo.
 fn write(dir: &Path, signs: [f64; 3]) {
     std::fs::create_dir_all(dir).expect("dir");
     let mut gt = GT_HEADER.join(",") + "\n";
@@ -59,14 +62,14 @@ fn write(dir: &Path, signs: [f64; 3]) {
         dvl += &format!("{},1.5,0.0,0.0\n", k as f64 * SPACING_S);
     }
     let mut imu = IMU_HEADER.join(",") + "\n";
-    let end = (119.0 * SPACING_S - IMU_CLOCK_OFFSET_S) / IMU_CLOCK_SCALE;
+    let end = (119.0 * SPACING_S - OFFSET_S) / IMU_CLOCK_SCALE;
     let mut k = 0;
     loop {
         let t_file = k as f64 * 0.01;
         if t_file > end {
             break;
         }
-        let t = IMU_CLOCK_SCALE * t_file + IMU_CLOCK_OFFSET_S;
+        let t = IMU_CLOCK_SCALE * t_file + OFFSET_S;
         let (w, f) = (body_rate(t), specific_force(t));
         imu += &format!(
             "{t_file},{},{},{},{},{},{}\n",
@@ -92,21 +95,28 @@ fn tmp(name: &str) -> std::path::PathBuf {
 /// reference's body rate and its accelerometer the specific force there.
 fn assert_frd(t: &Trajectory) {
     let imu = t.imu.as_ref().expect("imu");
-    assert!((imu[0].0 - IMU_CLOCK_OFFSET_S).abs() < 1e-9, "{:?}", imu[0]);
+    let check = t.imu_check.expect("check");
+    assert!((check.clock_offset_s - OFFSET_S).abs() < 0.005, "{check:?}");
+    assert!(
+        (imu[0].0 - check.clock_offset_s).abs() < 1e-9,
+        "{:?}",
+        imu[0]
+    );
     for (t_s, f, w) in imu.iter().step_by(997) {
+        // At the stamp the import gives, off by at most the fit's error
+        // (5 ms: some µrad/s and mm/s² here).
         let (w_ref, f_ref) = (body_rate(*t_s), specific_force(*t_s));
         for i in 0..3 {
             assert!(
-                (w[i] - w_ref[i]).abs() < 1e-6,
+                (w[i] - w_ref[i]).abs() < 2e-5,
                 "{t_s}: {w:?} against {w_ref:?}"
             );
             assert!(
-                (f[i] - f_ref[i]).abs() < 1e-6,
+                (f[i] - f_ref[i]).abs() < 2e-3,
                 "{t_s}: {f:?} against {f_ref:?}"
             );
         }
     }
-    let check = t.imu_check.expect("check");
     assert!(
         check.rate_correlation.iter().all(|c| *c > 0.99),
         "{check:?}"
