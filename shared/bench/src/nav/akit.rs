@@ -9,7 +9,8 @@
 //! from the reference's first position, scored by the same code. (Applying
 //! each sample to the interval before it instead gives 0.663 / 0.312 / 0.366
 //! / 0.994 % on trajectories 1-4; held forward gives the 0.57 /
-//! 0.25 / 0.36 / 0.93 %, so that is the baseline.)
+//! 0.25 / 0.36 / 0.93 %, so that is the baseline.) Where a trajectory has
+//! its IMU file, `ekf` on the `--imu` import's messages and manifest too.
 
 use std::path::{Path, PathBuf};
 
@@ -17,7 +18,9 @@ use anyhow::Context as _;
 use serde_json::{Map, Value, json};
 
 use nauta_estimation::Estimator;
+use nauta_estimation::ains::AinsInput;
 use nauta_estimation::ains::dr::{DeadReckoning, DrParams, Site};
+use nauta_estimation::ains::ekf::{Ekf, EkfParams};
 use nauta_estimation::frames::{Frd, Ned, Rotation, Vector};
 use nauta_estimation::local::geodetic_of;
 use nauta_estimation::readings::Nav;
@@ -50,6 +53,16 @@ fn trajectories(dir: &Path) -> anyhow::Result<Vec<(u32, PathBuf)>> {
     Ok(found)
 }
 
+/// Whether `dir` holds the trajectory's IMU file (`IMU_*.csv`).
+fn has_imu(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|entries| {
+        entries.flatten().any(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            name.starts_with("IMU_") && name.ends_with(".csv")
+        })
+    })
+}
+
 fn score(mut data: Data) -> anyhow::Result<Metrics> {
     eval::live::sort(&mut data);
     eval::evaluate(Path::new("(in process)"), &data)?
@@ -68,10 +81,11 @@ fn reference(data: &mut Data, m: &SensorMessage) -> anyhow::Result<()> {
     }
 }
 
-/// `dr` on the messages, the service's order at each stamp.
-fn run_dr(
+/// A variant (`dr`, `ekf`) on the messages, the service's order at each
+/// stamp.
+fn run_variant<E: Estimator<Input = AinsInput, Output = Nav>>(
     messages: &[(u64, usize, SensorMessage)],
-    mut dr: DeadReckoning,
+    mut dr: E,
 ) -> anyhow::Result<Metrics> {
     let mut data = Data::default();
     let (mut inputs, mut out) = (Vec::new(), Vec::<Nav>::new());
@@ -162,7 +176,7 @@ pub fn akit_trajectories(dir: &Path, progress: bool) -> anyhow::Result<Map<Strin
             lon_rad: r0.lon_rad,
             declination_rad: 0.0,
         };
-        let dr = run_dr(&messages, DeadReckoning::new(&params, site)?)?;
+        let dr = run_variant(&messages, DeadReckoning::new(&params, site)?)?;
         let naive = run_naive(&messages)?;
         let (d, v) = (
             dr.final_error_pct.context("dr: no final error")?,
@@ -173,10 +187,20 @@ pub fn akit_trajectories(dir: &Path, progress: bool) -> anyhow::Result<Map<Strin
                 "  A-KIT trajectory {n}: dr {d:.3} %, naive 1 Hz DR {v:.3} % of the distance"
             );
         }
-        out.insert(
-            n.to_string(),
-            json!({ "dr": { "final_error_pct": d }, "naive_dr_pct": v }),
-        );
+        let mut entry = json!({ "dr": { "final_error_pct": d }, "naive_dr_pct": v });
+        if has_imu(&path) {
+            let t = akit::read(&path, true)?;
+            let manifest_text = akit::manifest(&t, "ekf", duration_s);
+            let manifest = Manifest::parse(&path.join("(imported manifest)"), &manifest_text)?;
+            let params: EkfParams = manifest.params("ains", Some("ekf"))?;
+            let ekf = run_variant(&akit::messages(&t), Ekf::new(&params, site)?)?;
+            let e = ekf.final_error_pct.context("ekf: no final error")?;
+            if progress {
+                eprintln!("  A-KIT trajectory {n}: ekf with the IMU {e:.3} %");
+            }
+            entry["ekf_imu"] = json!({ "final_error_pct": e });
+        }
+        out.insert(n.to_string(), entry);
     }
     Ok(out)
 }

@@ -743,6 +743,9 @@ fn print_table(r: &Value) {
                 t["naive_dr_pct"].as_f64().unwrap_or(f64::NAN),
             );
             println!("A-KIT trajectory {n}: dr {d:.3} %, naive 1 Hz DR {v:.3} % of the distance");
+            if let Some(e) = t["ekf_imu"]["final_error_pct"].as_f64() {
+                println!("A-KIT trajectory {n}: ekf with the IMU {e:.3} %");
+            }
             dr.push(d);
             naive.push(v);
         }

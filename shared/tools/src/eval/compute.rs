@@ -27,8 +27,10 @@ pub const CHI2_2DOF_95: f64 = 5.991_464_547_107_979;
 pub const CHI2_3DOF_95: f64 = 7.814_727_903_251_178;
 
 /// Two neighbouring samples further apart than this are not interpolated
-/// between (the reference has a hole there), s.
-pub const MAX_INTERPOLATION_GAP_S: f64 = 1.0;
+/// between (the reference has a hole there), s. Above 1 s: a 1 Hz reference
+/// is interpolated between its samples (A-KIT's are 1.0025 s apart, and an
+/// IMU-rate estimate falls between them).
+pub const MAX_INTERPOLATION_GAP_S: f64 = 1.5;
 
 /// What the estimates are compared with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
