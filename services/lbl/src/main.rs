@@ -14,9 +14,8 @@
 
 use std::process::ExitCode;
 
-use anyhow::Context as _;
 use clap::Parser;
-use nauta_estimation::lbl::{Lbl, LblInput, LblOutput, LblParams, VARIANTS};
+use nauta_estimation::lbl::{Lbl, LblInput, LblOutput, VARIANTS};
 use nauta_messages::{LblInterrogation, LblSnapshot, LblSolution, Role};
 use nauta_runtime::process::ProcessArgs;
 use nauta_runtime::{Manifest, Shell, services};
@@ -54,17 +53,12 @@ fn main() -> ExitCode {
         .main(&args.process, core_for)
 }
 
-/// The core with its parameters from the manifest and its site.
+/// The core with its parameters from the manifest and its site
+/// ([`Manifest::lbl_core`], as `nauta smooth` builds it); the site's
+/// declination logged first.
 fn core_for(manifest: &Manifest, process: &str, variant: &str) -> anyhow::Result<Lbl> {
-    let file = manifest.path.display();
-    let params: LblParams = manifest.params(process, Some(variant))?;
-    let site = manifest
-        .site
-        .as_ref()
-        .with_context(|| format!("{file}: the manifest has no [site]: LBL needs the origin, the transponders and the sound speed"))?;
-    site.log_declination();
-    let lbl_site = site
-        .lbl_site()
-        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
-    Lbl::new(&params, lbl_site).with_context(|| format!("{file}: process.{process}"))
+    if let Some(site) = &manifest.site {
+        site.log_declination();
+    }
+    manifest.lbl_core(process, variant)
 }

@@ -21,8 +21,15 @@
 //!   same `Q`: the mean trace of `P_xy` from 60 s on with `selection =
 //!   "fom"` over the same with `"round-robin"` (paper 003 §V-D).
 //!
-//! The smoothed figures (`smoothed`, `smooth_2h_s`) are `nauta smooth`'s
-//! (issue 15 point 4); until it runs here they are `null`.
+//! The smoothed figures are `nauta smooth`'s (issue 15 point 4): each
+//! mission's inputs (as the closed loop fed them) go through the filter
+//! again ([`nauta_estimation::lbl::forward_pass`]) and the command's own
+//! backward pass ([`nauta_tools::smooth::track::smoothed_track`], the
+//! bridged smoother), and eval scores the track on `smoother/lbl/nav` as it
+//! scores `lbl/nav`: per layout `smoothed` holds the same figures as
+//! `filter` and `rms_over_filter` (smoothed RMS over the filter's).
+//! `smooth_2h_s` is `nauta bench smooth`'s (the passes over a 2-hour
+//! mission, [`crate::smooth::smooth_2h`]).
 //!
 //! The IMU and the truth run at 20 Hz instead of the manifest's 100 Hz: the
 //! LBL role takes no IMU, its sensors (AHRS, depth, propeller, 10 Hz) draw
@@ -35,7 +42,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 use serde_json::{Value, json};
 
-use nauta_estimation::lbl::{Lbl, LblOutput, LblParams, LblSite, LblStats};
+use nauta_estimation::lbl::{Lbl, LblInput, LblOutput, LblParams, LblSite, LblStats, forward_pass};
 use nauta_messages::{GPS_SERVICE, LblSolution, SensorMessage, TRUTH_SERVICE, TruthState};
 use nauta_runtime::Manifest;
 use nauta_runtime::manifest::apply_override;
@@ -45,6 +52,7 @@ use nauta_sim::params::SensorParams;
 use nauta_sim::scenario::Generator;
 use nauta_sim::suite::LblLayout;
 use nauta_tools::eval::{self, Data};
+use nauta_tools::smooth::track::{TOPIC as SMOOTHED, smoothed_track};
 
 use crate::nav::{par_map, take};
 
@@ -142,6 +150,10 @@ struct Solution {
 pub struct Run {
     /// eval's metrics of `lbl/nav`.
     pub metrics: eval::Metrics,
+    /// eval's metrics of the smoothed track (`smoother/lbl/nav`).
+    pub smoothed: eval::Metrics,
+    /// The 1σ semi-major axis of every smoothed solution, m.
+    pub smoothed_majors: Vec<f64>,
     /// eval's horizontal error of each solution: (stamp, m).
     pub errors: Vec<(u64, f64)>,
     solutions: Vec<Solution>,
@@ -171,6 +183,9 @@ pub fn run(setup: &Setup, seed: u64) -> anyhow::Result<Run> {
     .context("the scenario")?;
     let mut est = Lbl::new(&setup.params, setup.site.clone())?;
     let mut lp = LblLoop::new(setup.sensor.lbl_sync_hz);
+    // The filter's inputs as the loop feeds them, for the smoother's
+    // forward pass (a recording's logged inputs).
+    let mut fed: Vec<(LblInput, Option<nauta_sim::suite::LblReplyReading>)> = Vec::new();
     // The origin a recording's `nauta.run` metadata carries: the site's.
     let mut data = Data::default();
     data.run.origin = Some(nauta_log::run::Found {
@@ -184,6 +199,7 @@ pub fn run(setup: &Setup, seed: u64) -> anyhow::Result<Run> {
     let mut wire = Vec::new();
     let mut last = 0;
     while let Some((m, step)) = lp.step(&mut g, &mut est) {
+        nauta_sim::lbl_inputs::inputs(&m, &mut fed);
         wire.clear();
         nauta_sim::wire::to_wire(&m, &mut wire);
         for w in &wire {
@@ -216,13 +232,32 @@ pub fn run(setup: &Setup, seed: u64) -> anyhow::Result<Run> {
         }
         last = m.stamp_ns;
     }
+    // `nauta smooth`: the filter forward again over the same inputs, then
+    // the command's backward pass.
+    let pass = forward_pass(
+        Lbl::new(&setup.params, setup.site.clone())?,
+        fed.iter().map(|(i, _)| i),
+    );
+    drop(fed);
+    let track = smoothed_track(&pass).map_err(|e| anyhow::anyhow!("smoothing: {e}"))?;
+    drop(pass);
+    let mut smoothed_majors = Vec::with_capacity(track.solutions.len());
+    for s in &track.solutions {
+        take(&mut data, SMOOTHED, s)?;
+        let p = nalgebra::Matrix2::new(s.p[0][0], s.p[0][1], s.p[1][0], s.p[1][1]);
+        smoothed_majors.push(eval::compute::ellipse_axes(&p).0);
+    }
     eval::live::sort(&mut data);
     let evaluation = eval::evaluate(Path::new("(in process)"), &data)?;
-    let metrics = evaluation
-        .streams
-        .get("lbl/nav")
-        .cloned()
-        .with_context(|| format!("lbl/nav not evaluated: {:?}", evaluation.skipped))?;
+    let stream = |topic: &str| {
+        evaluation
+            .streams
+            .get(topic)
+            .cloned()
+            .with_context(|| format!("{topic} not evaluated: {:?}", evaluation.skipped))
+    };
+    let metrics = stream("lbl/nav")?;
+    let smoothed = stream(SMOOTHED)?;
     let errors = evaluation
         .series
         .get("lbl/nav")
@@ -234,6 +269,8 @@ pub fn run(setup: &Setup, seed: u64) -> anyhow::Result<Run> {
         .unwrap_or_default();
     Ok(Run {
         metrics,
+        smoothed,
+        smoothed_majors,
         errors,
         solutions,
         replies,
@@ -326,6 +363,10 @@ struct Outcome {
     rms_m: f64,
     inside_pct: f64,
     majors: Vec<f64>,
+    /// The same of the smoothed track.
+    smoothed_rms_m: f64,
+    smoothed_inside_pct: f64,
+    smoothed_majors: Vec<f64>,
     /// (multipath, of them gated, direct, of them gated).
     replies: [usize; 4],
     /// Σ squared current error, solutions.
@@ -367,6 +408,9 @@ fn run_job(job: Job) -> anyhow::Result<Outcome> {
         rms_m: r.metrics.horizontal_rms_m.unwrap_or(f64::NAN),
         inside_pct: r.metrics.inside_95_pct.unwrap_or(f64::NAN),
         majors: r.solutions.iter().map(|s| s.major_m).collect(),
+        smoothed_rms_m: r.smoothed.horizontal_rms_m.unwrap_or(f64::NAN),
+        smoothed_inside_pct: r.smoothed.inside_95_pct.unwrap_or(f64::NAN),
+        smoothed_majors: r.smoothed_majors.clone(),
         replies: rep,
         current: r.current_error(),
         mean_trace_m2: r.mean_trace(),
@@ -402,15 +446,38 @@ fn cycles(k: usize, n: usize) -> usize {
     k.div_ceil(n.max(1))
 }
 
+/// The track figures of `missions`: the p50 of the semi-major axes of
+/// every solution, the RMS over seeds, the mean, worst and best inside
+/// 95 %, of what `of` picks (RMS, inside 95 %, semi-major axes).
+fn track_figures(missions: &[&Outcome], of: impl Fn(&Outcome) -> (f64, f64, &[f64])) -> Value {
+    let n = missions.len();
+    let rms = (missions.iter().map(|o| of(o).0.powi(2)).sum::<f64>() / n as f64).sqrt();
+    let inside = missions.iter().map(|o| of(o).1).sum::<f64>() / n as f64;
+    let majors = missions
+        .iter()
+        .flat_map(|o| of(o).2.iter().copied())
+        .collect();
+    json!({
+        "ellipse_major_p50_m": median(majors),
+        "horizontal_rms_m": rms,
+        "inside_95_pct": inside,
+        "horizontal_rms_worst_m": max(missions.iter().map(|o| of(o).0)),
+        "inside_95_min_pct": min(missions.iter().map(|o| of(o).1)),
+        "inside_95_max_pct": max(missions.iter().map(|o| of(o).1)),
+    })
+}
+
 /// The figures of one layout's missions and blackouts.
 fn layout_figures(missions: &[&Outcome], blackouts: &[&Outcome]) -> Value {
     let n = missions.len();
-    let rms = (missions.iter().map(|o| o.rms_m.powi(2)).sum::<f64>() / n as f64).sqrt();
-    let inside = missions.iter().map(|o| o.inside_pct).sum::<f64>() / n as f64;
-    let majors = missions
-        .iter()
-        .flat_map(|o| o.majors.iter().copied())
-        .collect();
+    let filter = track_figures(missions, |o| (o.rms_m, o.inside_pct, &o.majors));
+    let mut smoothed = track_figures(missions, |o| {
+        (o.smoothed_rms_m, o.smoothed_inside_pct, &o.smoothed_majors)
+    });
+    let ratio = |v: &Value| v["horizontal_rms_m"].as_f64().unwrap_or(f64::NAN);
+    smoothed["rms_over_filter"] = (ratio(&smoothed) / ratio(&filter)).into();
+    smoothed["rms_over_filter_worst_seed"] =
+        max(missions.iter().map(|o| o.smoothed_rms_m / o.rms_m)).into();
     let mut rep = [0; 4];
     for o in missions {
         for (a, b) in rep.iter_mut().zip(o.replies) {
@@ -423,16 +490,9 @@ fn layout_figures(missions: &[&Outcome], blackouts: &[&Outcome]) -> Value {
     let b: Vec<_> = blackouts.iter().filter_map(|o| o.blackout).collect();
     let tx = missions.first().map_or(1, |o| o.transponders);
     json!({
-        "filter": {
-            "ellipse_major_p50_m": median(majors),
-            "horizontal_rms_m": rms,
-            "inside_95_pct": inside,
-            "horizontal_rms_worst_m": max(missions.iter().map(|o| o.rms_m)),
-            "inside_95_min_pct": min(missions.iter().map(|o| o.inside_pct)),
-            "inside_95_max_pct": max(missions.iter().map(|o| o.inside_pct)),
-        },
-        // `nauta smooth`'s figures (issue 15 point 4) go here.
-        "smoothed": Value::Null,
+        "filter": filter,
+        // `nauta smooth`'s track (issue 15 point 4).
+        "smoothed": smoothed,
         "multipath_rejected_pct": pct(rep[1], rep[0]),
         "valid_rejected_pct": pct(rep[3], rep[2]),
         "multipath_replies": rep[0],
@@ -517,6 +577,8 @@ pub fn measure(quick: bool, progress: bool) -> anyhow::Result<Value> {
             .collect()
     };
     let (fom, rr) = (trace(true), trace(false));
+    // After the missions: timed alone, as `nauta bench smooth` does.
+    let smooth_2h_s = crate::smooth::smooth_2h()?.smooth_2h_s;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let ratios: Vec<f64> = fom.iter().zip(&rr).map(|(a, b)| a / b).collect();
     // The worst seed; a seed that never re-accepts or recovers is `null`.
@@ -539,7 +601,7 @@ pub fn measure(quick: bool, progress: bool) -> anyhow::Result<Value> {
         "blackout_recover_cycles": worst(&recover),
         "blackout_s": BLACKOUT_S,
         // `nauta smooth`'s passes over the 2-hour mission (issue 15 point 4).
-        "smooth_2h_s": Value::Null,
+        "smooth_2h_s": smooth_2h_s,
         "seeds": seeds(quick),
         "wall_s": t0.elapsed().as_secs_f64(),
     }))
@@ -630,7 +692,9 @@ mod tests {
     }
 
     /// A short run: eval scores `lbl/nav` at 10 Hz, every reply is seen, a
-    /// blackout that the run does not reach gives no figure.
+    /// blackout that the run does not reach gives no figure; the smoothed
+    /// track has a solution at every one of the filter's, a smaller p50
+    /// semi-major axis and a smaller RMS.
     #[test]
     fn a_short_run_is_scored_by_eval() {
         let mut s = Setup::on(LblLayout::Two, &[]).expect("setup");
@@ -641,5 +705,11 @@ mod tests {
         assert!(r.metrics.horizontal_rms_m.expect("rms") < 1.0);
         assert!(!r.replies.is_empty() && !r.pings.is_empty());
         assert!(r.blackout(BLACKOUT_S).is_none());
+        assert_eq!(r.smoothed.samples, r.metrics.samples);
+        assert_eq!(r.smoothed_majors.len(), r.solutions.len());
+        let p50 = median(r.solutions.iter().map(|s| s.major_m).collect());
+        assert!(median(r.smoothed_majors.clone()) < p50);
+        let (f, s) = (r.metrics.horizontal_rms_m, r.smoothed.horizontal_rms_m);
+        assert!(s.expect("smoothed rms") < f.expect("rms"), "{s:?} vs {f:?}");
     }
 }
