@@ -4,31 +4,10 @@
 //! and the offline entry point that runs the filter over a recording's
 //! checked inputs in stamp order (what `nauta smooth` feeds it).
 
-use nalgebra::{SMatrix, SVector};
-
 use crate::lbl::core::Lbl;
 use crate::lbl::{LblInput, LblOutput};
 use crate::role::{Estimator, EstimatorError};
-
-/// One step of the forward pass at `t_i` (the smoother's
-/// `nauta_estimation::smoother::ForwardStep`, field for field, until the
-/// two branches meet).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ForwardStep<const N: usize> {
-    /// `t_i`, ns.
-    pub stamp_ns: u64,
-    /// `φ_{i-1} = φ(t_i, t_{i-1})`, from the previous step's posterior to
-    /// this step's prior (the identity at the first step).
-    pub phi: SMatrix<f64, N, N>,
-    /// `E⁻_i = φ_{i-1} E_{i-1} + b_{i-1}`.
-    pub x_prior: SVector<f64, N>,
-    /// `P⁻_i = φ_{i-1} P_{i-1} φ_{i-1}ᵀ + Q_{i-1}`.
-    pub p_prior: SMatrix<f64, N, N>,
-    /// `E_i`, after this step's range corrections and GPS fix.
-    pub x_post: SVector<f64, N>,
-    /// `P_i`.
-    pub p_post: SMatrix<f64, N, N>,
-}
+pub use crate::smoother::ForwardStep;
 
 /// The steps of a forward pass, of the filter's dimension.
 #[derive(Debug, Clone, PartialEq)]

@@ -24,23 +24,6 @@ pub struct Track {
     pub backward_s: f64,
 }
 
-/// The steps of the lbl filter as the smoother's (the same fields).
-fn as_smoother<const N: usize>(
-    steps: &[nauta_estimation::lbl::ForwardStep<N>],
-) -> Vec<ForwardStep<N>> {
-    steps
-        .iter()
-        .map(|s| ForwardStep {
-            stamp_ns: s.stamp_ns,
-            phi: s.phi,
-            x_prior: s.x_prior,
-            p_prior: s.p_prior,
-            x_post: s.x_post,
-            p_post: s.p_post,
-        })
-        .collect()
-}
-
 /// The filter's `lbl/nav` at a smoothed step, with the smoothed `x`, `y`,
 /// current and the `[x, y, w_x, w_y]` block of `P`; the last range's
 /// innovation, transponder and gate verdict are the filter's (the smoother
@@ -63,15 +46,14 @@ fn smoothed_nav<const N: usize>(filtered: &LblNav, s: &SmoothedStep<N>) -> LblNa
 }
 
 fn track_of<const N: usize>(
-    steps: &[nauta_estimation::lbl::ForwardStep<N>],
+    steps: &[ForwardStep<N>],
     navs: &[LblNav],
 ) -> Result<Track, SmoothError> {
     const { assert!(N >= 4, "the LBL state starts with [x, y, w_x, w_y]") };
-    let steps = as_smoother(steps);
     let start = Instant::now();
     // A restart (a GPS reset, a re-acquisition) is carried back as a fix of
     // the position, x and y.
-    let smoothed = smoother::smooth_bridged(&steps, 2)?;
+    let smoothed = smoother::smooth_bridged(steps, 2)?;
     let backward_s = start.elapsed().as_secs_f64();
     // Both in stamp order: walk them together.
     let mut solutions = Vec::with_capacity(navs.len());
